@@ -1,0 +1,261 @@
+"""The ``bayescal`` command line.
+
+Exit codes (../shared/DESIGN.md): 0 success, 1 an analysis ran but a health check failed,
+2 bad input or usage, 3 an internal error (a bug: please report it; set BAYESCAL_DEBUG=1
+to see the traceback).
+"""
+
+import argparse
+import os
+import sys
+
+from ._errors import BayescalError, InputError
+
+INTERNAL_ERROR = 3
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message}; see '{self.prog} --help'\n")
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"{text} must be positive")
+    return value
+
+
+def _confidence(text: str) -> float:
+    value = _positive_float(text)
+    if not value < 1:
+        raise argparse.ArgumentTypeError(f"{text} must lie between 0 and 1 (0.95 for 95 %)")
+    return value
+
+
+def _taus(text: str):
+    if text in ("all", "octave", "decade"):
+        return text
+    if "," in text or "." in text:
+        try:
+            return [float(part) for part in text.split(",") if part.strip()]
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"'{text}' is not a list of seconds") from None
+    try:
+        count = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"'{text}' is not 'all', 'octave', 'decade', a count or a list of seconds"
+        ) from None
+    if count < 2:
+        raise argparse.ArgumentTypeError(f"{text}: ask for at least 2 taus")
+    return count
+
+
+def _columns(text: str) -> tuple[str, str, str]:
+    names = tuple(part.strip() for part in text.split(","))
+    if len(names) != 3 or not all(names):
+        raise argparse.ArgumentTypeError(f"'{text}' must name three columns X,Y,Z")
+    return names
+
+
+def _add_recording_arguments(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("recording")
+    group.add_argument("file", nargs="?", help="recording: .csv, .parquet or .npz")
+    group.add_argument("--channel", help="column to analyse, e.g. gyro_x")
+    group.add_argument(
+        "--unit",
+        help="unit of the channel (deg/s, rad/s, m/s^2, g ...); "
+        "default: from the header, e.g. gyro_x[deg/s]",
+    )
+    group.add_argument(
+        "--rate",
+        type=_positive_float,
+        metavar="HZ",
+        help="sample rate; samples are then taken as evenly spaced",
+    )
+    group.add_argument("--time-column", metavar="NAME", help="time column (default: time or t)")
+    group.add_argument(
+        "--time-unit", metavar="UNIT", help="unit of the time column (s, ms, us, ns)"
+    )
+    group.add_argument(
+        "--gaps",
+        choices=("error", "split"),
+        default="error",
+        help="on a gap in the time stamps: stop with an error (default) or "
+        "analyse the segments without bridging it",
+    )
+    window = parser.add_argument_group("window")
+    window.add_argument(
+        "--start",
+        type=float,
+        metavar="S",
+        help="start of the window, seconds from the first sample",
+    )
+    window.add_argument(
+        "--stop", type=float, metavar="S", help="end of the window, seconds from the first sample"
+    )
+    window.add_argument(
+        "--pad",
+        action="store_true",
+        help="flight log: use the quiet window on the pad before liftoff",
+    )
+    window.add_argument(
+        "--accel-columns",
+        type=_columns,
+        metavar="X,Y,Z",
+        help="accelerometer columns for --pad (default: found by name)",
+    )
+    window.add_argument(
+        "--accel-unit",
+        metavar="UNIT",
+        help="unit of the accelerometer columns for --pad (g or m/s^2)",
+    )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="bayescal",
+        description="Bayesian uncertainty quantification of "
+        "inertial sensors. Run 'bayescal noise --example' to try it.",
+    )
+    commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    noise = commands.add_parser(
+        "noise",
+        help="noise of one static channel: bias, Allan deviation, IEEE 952 terms",
+        description="Classical noise analysis of one static channel: bias with its Student-t "
+        "interval and a check of its validity, Allan deviation with chi-square intervals, "
+        "and the IEEE Std 952 slope readings of Q, N, B and K.",
+    )
+    _add_recording_arguments(noise)
+    noise.add_argument(
+        "--example",
+        action="store_true",
+        help="analyse a built-in simulated gyro recording instead of a file",
+    )
+    noise.add_argument("--seed", type=int, default=0, help="seed of the --example recording")
+    noise.add_argument(
+        "--confidence",
+        type=_confidence,
+        default=0.95,
+        help="confidence of every interval (default 0.95)",
+    )
+    noise.add_argument(
+        "--taus",
+        type=_taus,
+        default="octave",
+        help="averaging times: octave (default), decade, all, a number of "
+        "log-spaced taus, or seconds such as 0.1,1,10",
+    )
+    noise.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    noise.set_defaults(run=_run_noise)
+    return parser
+
+
+def _load(args):
+    from ._examples import example_table
+    from ._recording import load_table
+
+    if getattr(args, "example", False):
+        if args.file:
+            raise InputError("give a FILE or --example, not both")
+        return example_table(args.seed), args.channel or "gyro_x"
+    if not args.file:
+        raise InputError("no recording given", fix="pass a FILE, or --example to try bayescal")
+    if not args.channel:
+        raise InputError(
+            "--channel is required",
+            source=args.file,
+            fix="name the column to analyse, e.g. --channel gyro_x",
+        )
+    return load_table(args.file), args.channel
+
+
+def _window(args, table) -> tuple[float | None, float | None, dict]:
+    from ._pad import find_pad_window
+
+    if args.pad:
+        if args.start is not None or args.stop is not None:
+            raise InputError("use either --pad or --start/--stop, not both")
+        pad = find_pad_window(
+            table,
+            accel_columns=args.accel_columns,
+            accel_unit=args.accel_unit,
+            time_column=args.time_column,
+            time_unit=args.time_unit,
+            rate=args.rate,
+        )
+        return (
+            pad.start_s,
+            pad.stop_s,
+            {
+                "selected_by": "pad",
+                "liftoff_s": pad.liftoff_s,
+                "pad_level_g": pad.pad_level_g,
+                "accel_columns": list(pad.accel_columns),
+                "notes": list(pad.notes),
+            },
+        )
+    selected = "start/stop" if args.start is not None or args.stop is not None else "whole record"
+    return args.start, args.stop, {"selected_by": selected}
+
+
+def _run_noise(args) -> int:
+    from ._classical import classical_noise
+    from ._noise_command import noise_result, noise_text
+    from ._output import check_writable, write_json
+    from ._recording import prepare_channel
+
+    if args.json:
+        check_writable(args.json, "--json")
+    table, channel = _load(args)
+    start, stop, window = _window(args, table)
+    data = prepare_channel(
+        table,
+        channel,
+        unit=args.unit,
+        rate=args.rate,
+        time_column=args.time_column,
+        time_unit=args.time_unit,
+        start=start,
+        stop=stop,
+        gaps=args.gaps,
+    )
+    window = {"start_s": data.start_s, "stop_s": data.stop_s, **window}
+    try:
+        classical = classical_noise(
+            data.values, data.rate_hz, confidence=args.confidence, taus=args.taus
+        )
+    except InputError as error:
+        raise InputError(error.problem, source=data.source, column=channel, fix=error.fix) from None
+    result = noise_result(data, classical, window)
+    result["notes"] = window.pop("notes", []) + result["notes"]
+    if args.json:
+        write_json(args.json, result)
+    print(noise_text(result))
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.run(args)
+    except BayescalError as error:
+        print(f"bayescal {args.command}: error: {error}", file=sys.stderr)
+        return error.exit_code
+    except Exception as error:
+        if os.environ.get("BAYESCAL_DEBUG"):
+            raise
+        print(
+            f"bayescal {args.command}: internal error (a bug, please report it): "
+            f"{type(error).__name__}: {error}; set BAYESCAL_DEBUG=1 for the traceback",
+            file=sys.stderr,
+        )
+        return INTERNAL_ERROR
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,48 @@
+"""Errors that reach a user, each with the exit code the command line gives it."""
+
+
+class BayescalError(Exception):
+    """Base of every error bayescal raises on purpose; ``exit_code`` is the CLI status."""
+
+    exit_code = 2
+
+
+class InputError(BayescalError, ValueError):
+    """Bad input: a file, column or argument that bayescal cannot use as given.
+
+    The message is one line that names what is wrong (file, column or argument), where
+    (row or time), and what to do about it.
+    """
+
+    exit_code = 2
+
+    def __init__(
+        self,
+        problem: str,
+        *,
+        source: str | None = None,
+        column: str | None = None,
+        fix: str | None = None,
+    ):
+        self.problem = problem
+        self.source = source
+        self.column = column
+        self.fix = fix
+        super().__init__(self._compose())
+
+    def _compose(self) -> str:
+        where = ": ".join(
+            part
+            for part in (self.source, f"column '{self.column}'" if self.column else None)
+            if part
+        )
+        text = f"{where}: {self.problem}" if where else self.problem
+        if self.fix:
+            text = f"{text}; {self.fix}"
+        return text
+
+
+class HealthCheckError(BayescalError, RuntimeError):
+    """An analysis ran but its result failed a health check (exit code 1)."""
+
+    exit_code = 1

@@ -1,0 +1,25 @@
+"""Built-in example recordings, made by bayescal's own simulator so that every command can be
+tried with no data at hand."""
+
+import jax
+import numpy as np
+
+from ._noise_model import NoiseModel
+from ._recording import Table
+
+# A MEMS-grade gyro axis: turn-on bias 0.4 deg/s, angle random walk 0.21 deg/sqrt(h),
+# rate random walk 8.6 deg/h/sqrt(h); one hour at 100 Hz.
+EXAMPLE_GYRO = NoiseModel(rate_hz=100.0, bias=0.4, N=0.0035, K=4e-5)
+EXAMPLE_DURATION_S = 3600.0
+
+
+def example_table(seed: int = 0) -> Table:
+    """One hour of a static gyro axis (``gyro_x`` in deg/s) with a ``time`` column."""
+    n = int(EXAMPLE_DURATION_S * EXAMPLE_GYRO.rate_hz)
+    gyro = np.asarray(EXAMPLE_GYRO.simulate(jax.random.PRNGKey(seed), n))
+    time = np.arange(n) / EXAMPLE_GYRO.rate_hz
+    source = (
+        f"<built-in example, seed {seed}: bias {EXAMPLE_GYRO.bias} deg/s, "
+        f"N {EXAMPLE_GYRO.N} deg/s/sqrt(Hz), K {EXAMPLE_GYRO.K} deg/s*sqrt(Hz)>"
+    )
+    return Table(source, {"time": time, "gyro_x": gyro}, {"time": "s", "gyro_x": "deg/s"})

@@ -1,0 +1,56 @@
+"""The simulator against the model's own Allan variance (tinygp style: simulated moments
+against the model's covariance), term by term and together."""
+
+import jax
+import numpy as np
+import pytest
+
+import bayescal as bc
+from bayescal._noise_model import NoiseModel
+
+RATE = 100.0
+N_SAMPLES = 2**14
+REPLICAS = 256
+
+TERMS = {
+    "white": dict(N=0.01),
+    "rate_random_walk": dict(K=2e-3),
+    "bias_instability": dict(B=5e-3),
+    "quantization": dict(Q=2e-4),
+    "rate_ramp": dict(R=1e-4),
+    "all": dict(N=0.01, K=2e-4, B=1e-3, Q=1e-4, R=1e-6),
+}
+
+
+@pytest.mark.parametrize("term", list(TERMS))
+def test_simulated_allan_variance_matches_model(term):
+    model = NoiseModel(rate_hz=RATE, bias=0.3, **TERMS[term])
+    keys = jax.random.split(jax.random.PRNGKey(42), REPLICAS)
+    samples = np.asarray(jax.jit(jax.vmap(lambda key: model.simulate(key, N_SAMPLES)))(keys))
+    result = bc.allan_deviation(samples, RATE, "octave", noise_type=0)
+    keep = result.m <= N_SAMPLES // 8
+    variance = result.deviation[:, keep] ** 2
+    expected = np.asarray(model.allan_variance(result.tau[keep]))
+    if term == "rate_ramp":  # deterministic: every replica gives R^2 tau^2 / 2
+        np.testing.assert_allclose(variance, np.broadcast_to(expected, variance.shape), rtol=1e-6)
+        return
+    standard_error = variance.std(axis=0, ddof=1) / np.sqrt(REPLICAS)
+    z = (variance.mean(axis=0) - expected) / standard_error
+    # 11 averaging times per term: |z| < 4 for all of them fails by chance with p < 1e-3.
+    assert np.all(np.abs(z) < 4), z
+
+
+def test_same_key_same_samples_and_bias_is_the_start():
+    model = NoiseModel(rate_hz=RATE, bias=0.3, N=0.01, K=1e-3, B=1e-3)
+    first = model.simulate(jax.random.PRNGKey(1), 1000)
+    np.testing.assert_array_equal(first, model.simulate(jax.random.PRNGKey(1), 1000))
+    assert not np.array_equal(first, model.simulate(jax.random.PRNGKey(2), 1000))
+    keys = jax.random.split(jax.random.PRNGKey(3), 4000)
+    starts = jax.vmap(lambda key: model.simulate(key, 64)[0])(keys)
+    # The first sample is the turn-on bias plus the first period's noise.
+    assert abs(float(np.mean(starts)) - 0.3) < 4 * float(np.std(starts)) / np.sqrt(4000)
+
+
+def test_rejects_a_non_positive_rate():
+    with pytest.raises(ValueError, match="rate_hz"):
+        NoiseModel(rate_hz=0.0)

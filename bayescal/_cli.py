@@ -151,7 +151,34 @@ def build_parser() -> argparse.ArgumentParser:
         "log-spaced taus, or seconds such as 0.1,1,10",
     )
     noise.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    bayes = noise.add_argument_group("Bayesian model")
+    bayes.add_argument(
+        "--terms",
+        default="white,bias_instability,rate_random_walk",
+        help="noise terms beside the bias: white, bias_instability (flicker), "
+        "rate_random_walk (rrw), quantization, rate_ramp (ramp), or all "
+        "(default: white,bias_instability,rate_random_walk)",
+    )
+    bayes.add_argument(
+        "--sensor",
+        metavar="NAME",
+        help="use a sensor card's datasheet figures as priors (bayescal sensors)",
+    )
+    bayes.add_argument(
+        "--out", metavar="DIR", help="write the posterior (ArviZ netCDF) and the JSON into DIR"
+    )
+    bayes.add_argument("--walkers", type=int, default=32, help="emcee walkers (default 32)")
+    bayes.add_argument(
+        "--max-steps",
+        type=int,
+        default=40_000,
+        help="most emcee steps before the convergence check fails",
+    )
+    bayes.add_argument("--classical-only", action="store_true", help="skip the Bayesian model")
+    bayes.add_argument("--quiet", action="store_true", help="no progress bar")
     noise.set_defaults(run=_run_noise)
+    sensors = commands.add_parser("sensors", help="list the sensor cards (datasheet priors)")
+    sensors.set_defaults(run=_run_sensors)
     return parser
 
 
@@ -206,9 +233,12 @@ def _window(args, table) -> tuple[float | None, float | None, dict]:
 def _run_noise(args) -> int:
     from ._classical import classical_noise
     from ._noise_command import noise_result, noise_text
+    from ._noise_fit import parse_terms
     from ._output import check_writable, write_json
     from ._recording import prepare_channel
 
+    terms = parse_terms(args.terms)
+    out_folder = _output_folder(args.out)
     if args.json:
         check_writable(args.json, "--json")
     table, channel = _load(args)
@@ -231,16 +261,104 @@ def _run_noise(args) -> int:
         )
     except InputError as error:
         raise InputError(error.problem, source=data.source, column=channel, fix=error.fix) from None
-    result = noise_result(data, classical, window)
+    fit = None if args.classical_only else _fit(args, data, classical, terms)
+    result = noise_result(data, classical, window, fit)
     result["notes"] = window.pop("notes", []) + result["notes"]
     if args.json:
         write_json(args.json, result)
+    if out_folder is not None:
+        _write_folder(out_folder, result, fit, data)
     print(noise_text(result))
+    if fit is not None and not fit.diagnostics.passed:
+        print(
+            f"bayescal noise: HEALTH CHECK FAILED for {data.channel}: "
+            + "; ".join(fit.diagnostics.failures),
+            file=sys.stderr,
+        )
+        return 1
     return 0
+
+
+def _output_folder(path):
+    from pathlib import Path
+
+    if path is None:
+        return None
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"--out {folder}: exists and is not a folder", fix="choose a folder")
+    if not folder.parent.is_dir():
+        raise InputError(
+            f"--out {folder}: folder '{folder.parent}' does not exist",
+            fix="create it or choose another path",
+        )
+    return folder
+
+
+def _fit(args, data, classical, terms):
+    from ._noise_fit import fit_noise
+    from ._sensors import card_prior, find_card
+
+    prior = None
+    if args.sensor:
+        prior = card_prior(find_card(args.sensor), terms, data.unit, classical.allan)
+    progress = not args.quiet and sys.stderr.isatty()
+    return fit_noise(
+        data.values,
+        data.rate_hz,
+        classical.allan,
+        terms=terms,
+        prior=prior,
+        seed=args.seed,
+        n_walkers=args.walkers,
+        max_steps=args.max_steps,
+        progress=progress,
+    )
+
+
+def _write_folder(folder, result, fit, data) -> None:
+    from ._output import write_json
+    from ._posterior_data import noise_datatree, write_netcdf
+
+    folder.mkdir(exist_ok=True)
+    stem = f"noise_{data.channel}"
+    if fit is not None:
+        tree = noise_datatree(fit, data.unit, channel=data.channel, source=data.source)
+        write_netcdf(tree, folder / f"{stem}_posterior.nc")
+    write_json(folder / f"{stem}.json", result)
+
+
+def _run_sensors(args) -> int:
+    from ._sensors import sensor_cards
+
+    for card in sensor_cards():
+        sections = [name for name in ("gyro", "accelerometer") if name in card.content]
+        print(
+            f"{card.name:<14} {card.content.get('grade', ''):<18} {'+'.join(sections):<20} "
+            f"{card.datasheet}"
+        )
+    return 0
+
+
+def _enable_compilation_cache() -> None:
+    """Keep JAX's compiled functions between runs (a second run starts in a second)."""
+    from pathlib import Path
+
+    import jax
+
+    root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    folder = root / "bayescal" / "jax"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return
+    jax.config.update("jax_compilation_cache_dir", str(folder))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    _enable_compilation_cache()
     try:
         return args.run(args)
     except BayescalError as error:

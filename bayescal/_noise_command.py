@@ -1,11 +1,22 @@
-"""``bayescal noise``: classical noise numbers of one static channel, as JSON-ready data and
-as the table the command prints."""
+"""``bayescal noise``: the noise of one static channel, classical and Bayesian side by side,
+as JSON-ready data and as the table the command prints."""
 
+import math
 from importlib.metadata import version
 
 from ._classical import ClassicalNoise, SlopeReading
+from ._noise_fit import TERM_OF_PARAMETER, NoiseFit
 from ._recording import ChannelData
 from ._units import display_values, noise_parameter_unit
+
+# Why a classical number and the posterior can disagree, by parameter.
+_WHY = {
+    "N": "at tau = 1 s the -1/2 line also carries the other terms, which the model separates",
+    "B": "the flat floor of the Allan curve is where white noise meets the slower terms "
+    "(a rate random walk, a ramp), not necessarily bias instability",
+    "K": "the +1/2 stretch of the Allan curve also carries bias instability and drift",
+    "Q": "the -1 stretch of the Allan curve also carries white noise",
+}
 
 _READ_AT = {
     "Q": "-1 line at tau = sqrt(3) s",
@@ -52,13 +63,117 @@ def _t_interval_explanation(classical: ClassicalNoise) -> str:
     )
 
 
-def noise_result(data: ChannelData, classical: ClassicalNoise, window: dict) -> dict:
+def _bayesian_block(fit: NoiseFit, unit: str) -> dict:
+    parameters = {}
+    for name, summary in fit.parameters.items():
+        parameter_unit = noise_parameter_unit(name, unit)
+        entry = {
+            "mean": summary.mean,
+            "sd": summary.sd,
+            "q05": summary.q05,
+            "q95": summary.q95,
+            "map": summary.map,
+            "map_sd": summary.map_sd,
+            "unit": parameter_unit,
+        }
+        if name in TERM_OF_PARAMETER:
+            entry["term"] = TERM_OF_PARAMETER[name]
+            entry["display"] = {
+                label: {
+                    key: display_values(name, getattr(summary, key), unit)[label]
+                    for key in ("mean", "q05", "q95")
+                }
+                for label in display_values(name, summary.mean, unit)
+            }
+        parameters[name] = entry
+    diagnostics = {
+        field: (list(value) if isinstance(value, tuple) else value)
+        for field, value in vars(fit.diagnostics).items()
+    }
+    diagnostics["sampler"] = "emcee ensemble, differential-evolution and snooker moves"
+    diagnostics["criteria"] = {
+        "max_rhat": 1.01,
+        "min_ess_bulk": 400,
+        "acceptance_fraction": [0.1, 0.8],
+        "steps_per_autocorrelation_time": 50,
+    }
+    return {
+        "terms": list(fit.terms),
+        "prior": fit.problem.prior.description,
+        "bias_definition": "turn-on bias: the expected reading at the start of the window",
+        "interval": 0.90,
+        "seed": fit.seed,
+        "parameters": parameters,
+        "diagnostics": diagnostics,
+    }
+
+
+def comparison_notes(classical: ClassicalNoise, fit: NoiseFit, unit: str) -> list[str]:
+    """Where the classical numbers and the posterior disagree beyond their uncertainties,
+    and why."""
+    notes = []
+    bias = fit.parameters["bias"]
+    t_sd = (
+        (classical.bias_ci_high - classical.bias_ci_low)
+        / 2
+        / _normal_quantile(classical.confidence)
+    )
+    ratio = bias.sd / t_sd
+    slow = [
+        f"{name} = {fit.parameters[name].mean:.3g} {noise_parameter_unit(name, unit)}"
+        for name in ("K", "B", "R")
+        if name in fit.parameters
+    ]
+    if ratio > 2:
+        notes.append(
+            f"bias: the posterior's uncertainty is {ratio:.3g}x the Student-t "
+            f"interval's: the model lets the bias wander ({', '.join(slow)}), which the "
+            "t-interval, treating the samples as independent, ignores"
+        )
+    if abs(bias.mean - classical.bias) > 2 * math.hypot(bias.sd, t_sd):
+        notes.append(
+            f"bias: the turn-on bias {bias.mean:.6g} {unit} and the sample mean "
+            f"{classical.bias:.6g} {unit} disagree beyond their uncertainties: the "
+            "bias moved during the record, and the mean is its average"
+        )
+    for name, reading in classical.slope_readings.items():
+        if name not in fit.parameters:
+            continue
+        posterior = fit.parameters[name]
+        parameter_unit = noise_parameter_unit(name, unit)
+        if reading.kind == "upper_bound":
+            if posterior.q05 > reading.ci_high:
+                notes.append(
+                    f"{name}: the posterior (5 % quantile {posterior.q05:.3g} "
+                    f"{parameter_unit}) lies above the bound the Allan curve allows "
+                    f"({reading.ci_high:.3g}): check the model's terms"
+                )
+            continue
+        if reading.ci_low > posterior.q95 or reading.ci_high < posterior.q05:
+            notes.append(
+                f"{name}: classical {reading.value:.3g} [{reading.ci_low:.3g}, "
+                f"{reading.ci_high:.3g}] and Bayesian {posterior.mean:.3g} "
+                f"[{posterior.q05:.3g}, {posterior.q95:.3g}] {parameter_unit} disagree "
+                f"beyond their uncertainties: {_WHY[name]}"
+            )
+    return notes
+
+
+def _normal_quantile(confidence: float) -> float:
+    from scipy import stats
+
+    return float(stats.norm.ppf(0.5 + confidence / 2))
+
+
+def noise_result(
+    data: ChannelData, classical: ClassicalNoise, window: dict, fit: NoiseFit | None = None
+) -> dict:
     """The JSON document of ``bayescal noise`` (contract in the README)."""
     unit = data.unit
     allan = classical.allan
     half_width = (classical.bias_ci_high - classical.bias_ci_low) / 2
     widening = classical.t_interval.widening
-    return {
+    result = {
         "bayescal_version": version("bayescal"),
         "source": data.source,
         "channel": data.channel,
@@ -107,6 +222,10 @@ def noise_result(data: ChannelData, classical: ClassicalNoise, window: dict) -> 
             },
         },
     }
+    if fit is not None:
+        result["bayesian"] = _bayesian_block(fit, unit)
+        result["bayesian"]["comparison"] = comparison_notes(classical, fit, unit)
+    return result
 
 
 def _number(value: float) -> str:
@@ -172,6 +291,62 @@ def noise_text(result: dict) -> str:
             else "no stretch of its slope: upper bound from the whole curve"
         )
         lines.append(f"  {parameter}  {shown}{extra}   ({how})")
+    if "bayesian" in result:
+        lines += _side_by_side(result)
     if result["notes"]:
         lines += ["", "  notes:"] + [f"  - {note}" for note in result["notes"]]
     return "\n".join(lines)
+
+
+def _side_by_side(result: dict) -> list[str]:
+    classical, bayesian = result["classical"], result["bayesian"]
+    percent = f"{100 * classical['bias']['confidence']:g}%"
+    lines = [
+        "",
+        f"  classical ({percent} intervals) and Bayesian (posterior mean, 90% interval; "
+        f"MAP +- Laplace sd); terms: {', '.join(bayesian['terms'])}",
+        f"  {'':6}{'unit':<16}{'classical':<38}{'Bayesian':<40}MAP",
+    ]
+    for name, entry in bayesian["parameters"].items():
+        if name == "bias":
+            bias = classical["bias"]
+            shown = (
+                f"{_number(bias['value'])} [{_number(bias['ci_low'])}, {_number(bias['ci_high'])}]"
+            )
+        elif name in classical["slope_readings"]:
+            reading = classical["slope_readings"][name]
+            shown = (
+                f"<= {_number(reading['ci_high'])}"
+                if reading["kind"] == "upper_bound"
+                else f"{_number(reading['value'])} [{_number(reading['ci_low'])}, "
+                f"{_number(reading['ci_high'])}]"
+            )
+        else:
+            shown = "-"
+        posterior = f"{_number(entry['mean'])} [{_number(entry['q05'])}, {_number(entry['q95'])}]"
+        lines.append(
+            f"  {name:<6}{entry['unit']:<16}{shown:<38}{posterior:<40}"
+            f"{_number(entry['map'])} +- {_number(entry['map_sd'])}"
+        )
+    for name, entry in bayesian["parameters"].items():
+        for label, shown in entry.get("display", {}).items():
+            lines.append(
+                f"  {name:<6}{label:<16}{'':<38}{_number(shown['mean'])} "
+                f"[{_number(shown['q05'])}, {_number(shown['q95'])}]"
+            )
+    diagnostics = bayesian["diagnostics"]
+    if diagnostics["passed"]:
+        lines.append(
+            f"  posterior checks passed: {diagnostics['n_steps']} steps x "
+            f"{diagnostics['n_walkers']} walkers, autocorrelation time <= "
+            f"{max(diagnostics['autocorr_time'].values()):.0f}, ESS >= "
+            f"{min(diagnostics['ess_bulk'].values()):.0f}, R-hat <= "
+            f"{max(diagnostics['rhat'].values()):.3f}, acceptance "
+            f"{diagnostics['acceptance_fraction']:.2f}"
+        )
+    else:
+        lines.append("  POSTERIOR CHECKS FAILED — do not use these Bayesian numbers:")
+        lines += [f"    - {failure}" for failure in diagnostics["failures"]]
+    if bayesian["comparison"]:
+        lines += ["", "  where they disagree:"] + [f"  - {note}" for note in bayesian["comparison"]]
+    return lines

@@ -135,7 +135,8 @@ def integral_unit(unit: str) -> str:
 
 
 def noise_parameter_unit(parameter: str, unit: str) -> str:
-    """Unit of noise parameter Q, N, B, K or R for a rate signal in ``unit`` (IEEE Std 952)."""
+    """Unit of noise parameter Q, N, B, K or R for a rate signal in ``unit`` (IEEE Std 952),
+    or of the output filter coefficient F."""
     match parameter:
         case "Q":
             return integral_unit(unit)
@@ -147,6 +148,8 @@ def noise_parameter_unit(parameter: str, unit: str) -> str:
             return f"{unit}*sqrt(Hz)"
         case "R":
             return _PER_SECOND.get(unit, f"{unit}/s")
+        case "F":
+            return "1"  # the output filter's coefficient is a pure number
     raise ValueError(f"unknown noise parameter {parameter!r}; expected one of {NOISE_PARAMETERS}")
 
 
@@ -179,3 +182,49 @@ def display_values(parameter: str, value: float, unit: str) -> dict[str, float]:
     parsed = parse_unit(unit)
     table = _DISPLAY.get(parsed.quantity, {}).get(parameter, ())
     return {label: value * parsed.to_si * factor for label, factor in table}
+
+
+# Units sensor cards (datasheets) give noise parameters in -> factor to SI parameter units
+# (rad/s or m/s^2 based; sqrt(Hz) = 1/sqrt(s)).
+_CARD_UNITS = {
+    "N": {
+        "deg/s/sqrt(Hz)": DEG,
+        "mdps/sqrt(Hz)": 1e-3 * DEG,
+        "rad/s/sqrt(Hz)": 1.0,
+        "deg/h/sqrt(Hz)": DEG / 3600.0,
+        "deg/sqrt(h)": DEG / 60.0,
+        "ug/sqrt(Hz)": 1e-6 * STANDARD_GRAVITY,
+        "mg/sqrt(Hz)": 1e-3 * STANDARD_GRAVITY,
+        "m/s^2/sqrt(Hz)": 1.0,
+        "m/s/sqrt(h)": 1.0 / 60.0,
+        "ft/s/sqrt(h)": 0.3048 / 60.0,
+    },
+    "B": {
+        "deg/h": DEG / 3600.0,
+        "deg/s": DEG,
+        "mg": 1e-3 * STANDARD_GRAVITY,
+        "ug": 1e-6 * STANDARD_GRAVITY,
+        "m/s^2": 1.0,
+    },
+    "K": {
+        "deg/h/sqrt(h)": DEG / 3600.0**1.5,
+        "deg/s*sqrt(Hz)": DEG,
+        "ug*sqrt(Hz)": 1e-6 * STANDARD_GRAVITY,
+        "m/s^2*sqrt(Hz)": 1.0,
+    },
+}
+
+
+def card_value_in(parameter: str, value: float, card_unit: str, channel_unit: str) -> float:
+    """A datasheet value of noise parameter N, B or K, converted to the parameter's unit for
+    a channel in ``channel_unit`` (:func:`noise_parameter_unit`)."""
+    factors = _CARD_UNITS[parameter]
+    if card_unit not in factors:
+        raise ValueError(
+            f"unit '{card_unit}' is not one a sensor card may give {parameter} in; "
+            f"use one of {', '.join(factors)}"
+        )
+    channel = parse_unit(channel_unit)
+    if not channel.known:
+        raise ValueError(f"the channel's unit '{channel_unit}' is not a physical unit")
+    return value * factors[card_unit] / channel.to_si

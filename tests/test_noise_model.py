@@ -18,7 +18,8 @@ TERMS = {
     "bias_instability": dict(B=5e-3),
     "quantization": dict(Q=2e-4),
     "rate_ramp": dict(R=1e-4),
-    "all": dict(N=0.01, K=2e-4, B=1e-3, Q=1e-4, R=1e-6),
+    "output_filter": dict(N=0.01, F=0.4),
+    "all": dict(N=0.01, K=2e-4, B=1e-3, Q=1e-4, R=1e-6, F=-0.2),
 }
 
 

@@ -1,0 +1,493 @@
+"""Fitting the stationary noise model: the point estimate by optimistix with its Laplace
+covariance, the posterior by emcee, both checked, and the result as ArviZ data.
+
+The noise parameters (N, B, K, Q) and the ramp R are sampled; the bias, linear and Gaussian
+given them, is drawn for each posterior draw from its exact conditional
+(:func:`bayescal._level.bias_given_noise`).
+
+Parameters are sampled unconstrained: the logarithm of each noise scale and R divided by its
+prior scale. Priors (weakly informative unless a sensor card is given): each noise scale is
+log-normal with its median at the level the classical Allan curve suggests for that term and
+a standard deviation of 4 in the logarithm (a factor 55); R is normal around zero with ten
+times the drift that would explain the whole Allan deviation at the longest tau; the bias
+is flat.
+"""
+
+import math
+import sys
+
+import emcee
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+from arviz_stats.base import array_stats
+
+from ._allan import DeviationResult
+from ._errors import InputError
+from ._level import LevelSummary, bias_given_noise, level_summary
+from ._noise_model import component_weights
+from ._whittle import SpectralSummary, spectral_summary, whittle_log_likelihood
+
+PARAMETER_OF_TERM = {
+    "output_filter": "F",
+    "quantization": "Q",
+    "white": "N",
+    "bias_instability": "B",
+    "rate_random_walk": "K",
+    "rate_ramp": "R",
+}
+TERM_OF_PARAMETER = {parameter: term for term, parameter in PARAMETER_OF_TERM.items()}
+TERM_ALIASES = {
+    "white": "white",
+    "n": "white",
+    "arw": "white",
+    "vrw": "white",
+    "bias_instability": "bias_instability",
+    "flicker": "bias_instability",
+    "b": "bias_instability",
+    "rate_random_walk": "rate_random_walk",
+    "rrw": "rate_random_walk",
+    "k": "rate_random_walk",
+    "quantization": "quantization",
+    "q": "quantization",
+    "rate_ramp": "rate_ramp",
+    "ramp": "rate_ramp",
+    "r": "rate_ramp",
+    "output_filter": "output_filter",
+    "filter": "output_filter",
+    "f": "output_filter",
+}
+DEFAULT_TERMS = ("white", "bias_instability", "rate_random_walk")
+ALL_TERMS = (
+    "quantization",
+    "white",
+    "output_filter",
+    "bias_instability",
+    "rate_random_walk",
+    "rate_ramp",
+)
+PRIOR_LOG_SD = 4.0
+RAMP_PRIOR_FACTOR = 10.0
+
+# Health checks of a posterior (Vehtari et al. 2021 for R-hat and ESS; emcee's guidance for
+# the autocorrelation time and the acceptance fraction).
+MAX_RHAT = 1.01
+MIN_ESS = 400
+ACCEPTANCE_RANGE = (0.1, 0.8)
+AUTOCORR_MULTIPLE = 50
+RHAT_GROUPS = 4
+MAX_STORED_DRAWS = 2000
+
+
+def parse_terms(spec: str) -> tuple[str, ...]:
+    """Noise terms from ``--terms`` (comma-separated names or aliases, or ``all``), in the
+    canonical order; the bias is always part of the model."""
+    if spec.strip().lower() == "all":
+        return ALL_TERMS
+    terms = set()
+    for word in spec.split(","):
+        name = word.strip().lower()
+        if not name or name == "bias":
+            continue
+        if name not in TERM_ALIASES:
+            raise InputError(
+                f"--terms: unknown term '{word.strip()}'",
+                fix="choose from white, bias_instability, rate_random_walk, "
+                "quantization, rate_ramp (or rrw, flicker, ramp, all)",
+            )
+        terms.add(TERM_ALIASES[name])
+    if not terms & {"white", "bias_instability", "rate_random_walk", "quantization"}:
+        raise InputError("--terms: the model needs at least one noise term (e.g. white)")
+    if "output_filter" in terms and "white" not in terms:
+        raise InputError("--terms: output_filter shapes the white noise; add white")
+    return tuple(term for term in ALL_TERMS if term in terms)
+
+
+class NoisePrior(eqx.Module):
+    """Independent normal priors on the sampled coordinates: log P for a noise scale P, and
+    R / ramp_scale for the ramp (whose prior is then N(0, 1))."""
+
+    location: np.ndarray
+    scale: np.ndarray
+    ramp_scale: np.ndarray
+    """Scale of the ramp's sampled coordinate (an array, so that jit traces it)."""
+    parameters: tuple[str, ...] = eqx.field(static=True)
+    description: str = eqx.field(static=True)
+
+    def __check_init__(self):
+        if len(self.parameters) != len(self.location) or len(self.location) != len(self.scale):
+            raise ValueError("prior: parameters, location and scale must have equal lengths")
+        if not np.all(np.asarray(self.scale) > 0):
+            raise ValueError("prior: every scale must be positive")
+
+
+def allan_reference_scales(allan: DeviationResult) -> dict[str, float]:
+    """The level of each term the classical Allan curve allows (its upper bound, DESIGN.md
+    table): the centres of the weakly informative priors."""
+    usable = np.isfinite(allan.deviation)
+    tau, sigma = allan.tau[usable], allan.deviation[usable]
+    return {
+        "Q": float(np.min(sigma * tau / math.sqrt(3.0))),
+        "N": float(np.min(sigma * np.sqrt(tau))),
+        "B": float(np.min(sigma) / math.sqrt(2 * math.log(2) / math.pi)),
+        "K": float(np.min(sigma * np.sqrt(3.0 / tau))),
+        "R": float(np.min(sigma * math.sqrt(2.0) / tau)),
+    }
+
+
+def default_prior(terms: tuple[str, ...], allan: DeviationResult) -> NoisePrior:
+    scales = allan_reference_scales(allan)
+    parameters = tuple(PARAMETER_OF_TERM[term] for term in terms)
+    location = [0.0 if p in ("R", "F") else math.log(scales[p]) for p in parameters]
+    scale = [1.0 if p in ("R", "F") else PRIOR_LOG_SD for p in parameters]
+    return NoisePrior(
+        np.array(location),
+        np.array(scale),
+        np.asarray(RAMP_PRIOR_FACTOR * scales["R"]),
+        parameters,
+        "weakly informative: log-normal noise scales, median at the Allan-curve "
+        f"bound of each term, sd {PRIOR_LOG_SD:g} in the log; normal ramp around 0; "
+        "atanh of the output filter coefficient standard normal",
+    )
+
+
+class NoiseProblem(eqx.Module):
+    """The log-posterior of the noise parameters of one record."""
+
+    spectral: SpectralSummary
+    level: LevelSummary
+    prior: NoisePrior
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        return self.prior.parameters
+
+    def natural(self, theta):
+        """Sampled coordinates -> parameter values in the channel's units."""
+        transform = {"R": lambda x: x * self.prior.ramp_scale, "F": jnp.tanh}
+        return {
+            name: transform.get(name, jnp.exp)(theta[..., index])
+            for index, name in enumerate(self.parameters)
+        }
+
+    def variances(self, theta):
+        """Weights of the spectral components (:func:`component_weights`)."""
+        values = self.natural(theta)
+        return component_weights(**{name: value for name, value in values.items() if name != "R"})
+
+    def ramp(self, theta):
+        return self.natural(theta).get("R", jnp.zeros(theta.shape[:-1]))
+
+    def pointwise_log_likelihood(self, theta):
+        return whittle_log_likelihood(self.spectral, self.variances(theta), self.ramp(theta))
+
+    def log_prior(self, theta):
+        return -0.5 * jnp.sum(((theta - self.prior.location) / self.prior.scale) ** 2)
+
+    def log_posterior(self, theta):
+        value = self.log_prior(theta) + jnp.sum(self.pointwise_log_likelihood(theta))
+        return jnp.where(jnp.isfinite(value), value, -jnp.inf)
+
+
+class ParameterSummary(eqx.Module):
+    mean: float
+    sd: float
+    q05: float
+    q95: float
+    map: float
+    map_sd: float
+    """Laplace (Hessian) standard deviation at the MAP, by the delta method."""
+
+
+class Diagnostics(eqx.Module):
+    passed: bool
+    failures: tuple[str, ...]
+    converged: bool
+    n_walkers: int
+    n_steps: int
+    burn_in: int
+    thin: int
+    """Steps between the posterior draws kept (about)."""
+    autocorr_time: dict
+    ess_bulk: dict
+    rhat: dict
+    acceptance_fraction: float
+    min_walker_acceptance: float
+    map_converged: bool
+
+
+class NoiseFit(eqx.Module):
+    """Posterior of the noise model of one channel, with its point estimate and checks."""
+
+    parameters: dict
+    """name -> :class:`ParameterSummary`, in the channel's units."""
+    diagnostics: Diagnostics
+    draws: dict
+    """name -> (walkers, draws) posterior draws, bias included."""
+    log_posterior: np.ndarray
+    """(walkers, draws) log posterior density of each draw."""
+    pointwise_log_likelihood: np.ndarray
+    """(walkers, draws, bins) Whittle log-likelihood of each frequency bin."""
+    map_theta: np.ndarray
+    laplace_covariance: np.ndarray
+    problem: NoiseProblem
+    terms: tuple[str, ...] = eqx.field(static=True)
+    seed: int = eqx.field(static=True)
+
+
+@eqx.filter_jit
+def _maximum_a_posteriori(problem: NoiseProblem):
+    """Minimise the negative log-posterior from two starts — the prior centres (the Allan
+    bounds) and a point well below them, where the terms a record does not hold sit — and
+    return the better optimum, its Hessian and whether that run converged."""
+
+    def objective(theta, _):
+        return -problem.log_posterior(theta)
+
+    solver = optx.BFGS(rtol=1e-9, atol=1e-9)
+    base = jnp.asarray(problem.prior.location)
+    lowered = base - 3.0 * jnp.array([p != "R" for p in problem.parameters])
+    solutions = [
+        optx.minimise(objective, solver, start, max_steps=2000, throw=False)
+        for start in (base, lowered)
+    ]
+    values = jnp.stack([objective(solution.value, None) for solution in solutions])
+    values = jnp.where(jnp.isfinite(values), values, jnp.inf)
+    pick = jnp.argmin(values)
+    best = jnp.where(pick == 0, solutions[0].value, solutions[1].value)
+    converged = jnp.where(
+        pick == 0,
+        solutions[0].result == optx.RESULTS.successful,
+        solutions[1].result == optx.RESULTS.successful,
+    )
+    return best, jax.hessian(lambda theta: objective(theta, None))(best), converged
+
+
+@eqx.filter_jit
+def _batch_log_posterior(problem: NoiseProblem, theta):
+    """Log-posterior of a batch of walkers; the problem is an argument, not a constant, so
+    one compilation serves every record of the same shape."""
+    return jax.vmap(problem.log_posterior)(theta)
+
+
+@eqx.filter_jit
+def _draw_quantities(problem: NoiseProblem, kept, key):
+    """Parameter values, bias draws (from its Gaussian conditional) and the pointwise
+    log-likelihood for each kept posterior draw."""
+    natural = problem.natural(kept)
+    mean, variance = bias_given_noise(problem.level, problem.variances(kept), problem.ramp(kept))
+    natural["bias"] = mean + jnp.sqrt(variance) * jax.random.normal(key, mean.shape)
+    pointwise = jax.vmap(jax.vmap(problem.pointwise_log_likelihood))(kept)
+    log_posterior = jax.vmap(jax.vmap(problem.log_posterior))(kept)
+    return natural, pointwise, log_posterior
+
+
+@eqx.filter_jit
+def _bias_at(problem: NoiseProblem, theta):
+    """Bias mean and variance at ``theta``, and its change per unit of the ramp R."""
+    variances, ramp = problem.variances(theta), problem.ramp(theta)
+    mean, variance = bias_given_noise(problem.level, variances, ramp)
+    return mean, variance, mean - bias_given_noise(problem.level, variances, ramp + 1.0)[0]
+
+
+def _sample(problem, start, covariance, rng, n_walkers, max_steps, progress):
+    dimension = start.size
+    # Differential-evolution moves (ter Braak 2006) with a share of snooker updates: their
+    # autocorrelation times here are a third of the stretch move's (about 20 against 50).
+    sampler = emcee.EnsembleSampler(
+        n_walkers,
+        dimension,
+        lambda theta: np.asarray(_batch_log_posterior(problem, jnp.asarray(theta))),
+        vectorize=True,
+        moves=[(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)],
+    )
+    sampler.random_state = np.random.RandomState(rng.integers(2**31)).get_state()
+    spread = np.linalg.cholesky(covariance + 1e-12 * np.eye(dimension))
+    state = start + rng.standard_normal((n_walkers, dimension)) @ spread.T
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(
+            total=max_steps, desc="posterior (emcee)", unit="step", leave=False, file=sys.stderr
+        )
+    # Converged when the run is longer than AUTOCORR_MULTIPLE autocorrelation times, by the
+    # estimate at two successive checks (a single estimate from a short run is itself noisy).
+    longer_before, converged, chunk = False, False, 250
+    while sampler.iteration < max_steps:
+        state = sampler.run_mcmc(state, min(chunk, max_steps - sampler.iteration))
+        if bar is not None:
+            bar.update(chunk)
+        tau = sampler.get_autocorr_time(tol=0)
+        longer = bool(
+            np.all(np.isfinite(tau)) and sampler.iteration > AUTOCORR_MULTIPLE * np.max(tau)
+        )
+        if longer and longer_before:
+            converged = True
+            break
+        longer_before = longer
+        chunk = max(chunk, int(sampler.iteration // 4))
+    if bar is not None:
+        bar.close()
+    return sampler, converged
+
+
+def noise_problem(
+    values,
+    rate_hz: float,
+    allan: DeviationResult,
+    *,
+    terms: tuple[str, ...] = DEFAULT_TERMS,
+    prior: NoisePrior | None = None,
+) -> NoiseProblem:
+    """The log-posterior of a rate series ``values`` (NaN: missing); ``allan`` is its classical
+    Allan deviation, which centres the default priors."""
+    values = np.asarray(values, dtype=float)
+    return NoiseProblem(
+        spectral_summary(values, rate_hz),
+        level_summary(values, rate_hz),
+        prior or default_prior(terms, allan),
+    )
+
+
+class PointEstimate(eqx.Module):
+    """The MAP: sampled coordinates, values in the channel's units, the Laplace covariance of
+    the sampled coordinates, and whether the optimisation converged."""
+
+    theta: np.ndarray
+    values: dict
+    covariance: np.ndarray
+    converged: bool
+
+
+def point_estimate(problem: NoiseProblem) -> PointEstimate:
+    best, hessian, converged = _maximum_a_posteriori(problem)
+    values = {name: float(value) for name, value in problem.natural(best).items()}
+    return PointEstimate(
+        np.asarray(best), values, np.linalg.pinv(np.asarray(hessian)), bool(converged)
+    )
+
+
+def fit_noise(
+    values,
+    rate_hz: float,
+    allan: DeviationResult,
+    *,
+    terms: tuple[str, ...] = DEFAULT_TERMS,
+    prior: NoisePrior | None = None,
+    seed: int = 0,
+    n_walkers: int = 32,
+    max_steps: int = 40_000,
+    progress: bool = False,
+) -> NoiseFit:
+    """Posterior of bias and noise terms of a static channel ``values`` (NaN: missing).
+
+    ``allan`` is the classical Allan deviation of the same values (it centres the default
+    priors). The same inputs and ``seed`` give the same result.
+    """
+    problem = noise_problem(values, rate_hz, allan, terms=terms, prior=prior)
+    rng = np.random.default_rng(seed)
+    estimate = point_estimate(problem)
+    n_walkers = max(n_walkers, 2 * estimate.theta.size + 2)
+    n_walkers += -n_walkers % RHAT_GROUPS
+    sampler, converged = _sample(
+        problem, estimate.theta, estimate.covariance, rng, n_walkers, max_steps, progress
+    )
+    diagnostics, kept = _diagnose(sampler, problem.parameters, converged, estimate.converged)
+    natural, pointwise, log_posterior = _draw_quantities(
+        problem, jnp.asarray(kept), jax.random.PRNGKey(int(rng.integers(2**31)))
+    )
+    natural = {name: np.asarray(value) for name, value in natural.items()}
+    map_values, map_sd = _map_summary(problem, estimate)
+    summaries = {
+        name: ParameterSummary(
+            float(np.mean(natural[name])),
+            float(np.std(natural[name], ddof=1)),
+            float(np.quantile(natural[name], 0.05)),
+            float(np.quantile(natural[name], 0.95)),
+            map_values[name],
+            map_sd[name],
+        )
+        for name in ("bias", *problem.parameters)
+    }
+    return NoiseFit(
+        parameters=summaries,
+        diagnostics=diagnostics,
+        draws=natural,
+        log_posterior=np.asarray(log_posterior),
+        pointwise_log_likelihood=np.asarray(pointwise),
+        map_theta=estimate.theta,
+        laplace_covariance=estimate.covariance,
+        problem=problem,
+        terms=tuple(terms),
+        seed=seed,
+    )
+
+
+def _diagnose(sampler, names, converged: bool, map_converged: bool):
+    """The health checks of an emcee run, and the draws kept from it, (walkers, draws, dim):
+    the same number for every run, so that the functions of them compile once."""
+    tau = sampler.get_autocorr_time(tol=0)
+    burn_in = math.ceil(2 * np.max(tau)) if np.all(np.isfinite(tau)) else sampler.iteration // 2
+    burn_in = min(burn_in, sampler.iteration // 2)
+    by_walker = np.moveaxis(sampler.get_chain(discard=burn_in), 0, 1)
+    steps = by_walker.shape[1]
+    kept = np.unique(np.linspace(0, steps - 1, MAX_STORED_DRAWS // by_walker.shape[0]).round())
+    groups = by_walker.reshape(RHAT_GROUPS, -1, by_walker.shape[2])
+    ess, rhat = {}, {}
+    for i, name in enumerate(names):
+        ess[name] = float(array_stats.ess(by_walker[..., i], chain_axis=0, draw_axis=1))
+        rhat[name] = float(array_stats.rhat(groups[..., i], chain_axis=0, draw_axis=1))
+    acceptance = sampler.acceptance_fraction
+    failures = []
+    if not converged:
+        failures.append(
+            f"autocorrelation-time criterion not met in {sampler.iteration} steps "
+            f"(needs {AUTOCORR_MULTIPLE} x tau = {AUTOCORR_MULTIPLE * np.max(tau):.0f})"
+        )
+    for name in names:
+        if not ess[name] >= MIN_ESS:
+            failures.append(f"effective sample size of {name} is {ess[name]:.0f} (< {MIN_ESS})")
+        if not rhat[name] <= MAX_RHAT:
+            failures.append(
+                f"R-hat of {name} across walker groups is {rhat[name]:.3f} (> {MAX_RHAT})"
+            )
+    if not ACCEPTANCE_RANGE[0] <= float(np.mean(acceptance)) <= ACCEPTANCE_RANGE[1]:
+        failures.append(f"acceptance fraction {np.mean(acceptance):.2f} outside {ACCEPTANCE_RANGE}")
+    if not map_converged:
+        failures.append("the MAP optimisation did not converge")
+    diagnostics = Diagnostics(
+        passed=not failures,
+        failures=tuple(failures),
+        converged=converged,
+        n_walkers=acceptance.size,
+        n_steps=int(sampler.iteration),
+        burn_in=burn_in,
+        thin=max(1, steps // kept.size),
+        autocorr_time={name: float(t) for name, t in zip(names, tau, strict=True)},
+        ess_bulk=ess,
+        rhat=rhat,
+        acceptance_fraction=float(np.mean(acceptance)),
+        min_walker_acceptance=float(np.min(acceptance)),
+        map_converged=map_converged,
+    )
+    return diagnostics, by_walker[:, kept.astype(int)]
+
+
+def _map_summary(problem: NoiseProblem, estimate: PointEstimate) -> tuple[dict, dict]:
+    """MAP values and their Laplace sds (delta method) in the channel's units, the bias
+    included (its conditional sd, widened by the ramp's uncertainty when R is fitted)."""
+    values, spread = dict(estimate.values), {}
+    for i, name in enumerate(problem.parameters):
+        sd = math.sqrt(max(estimate.covariance[i, i], 0.0))
+        slope = {"R": float(problem.prior.ramp_scale), "F": 1.0 - values.get("F", 0.0) ** 2}
+        spread[name] = sd * slope.get(name, values[name])
+    mean, variance, per_ramp = (
+        float(value) for value in _bias_at(problem, jnp.asarray(estimate.theta))
+    )
+    if "R" in problem.parameters:
+        variance += per_ramp**2 * spread["R"] ** 2
+    values["bias"], spread["bias"] = mean, math.sqrt(variance)
+    return values, spread

@@ -1,0 +1,72 @@
+"""Coverage of the 90 % credible intervals of N, B and K over simulated records, and, for
+contrast, of the Student-t interval on the turn-on bias of the same records.
+
+    python benchmarks/noise_coverage.py [--simulations 200] [--samples 65536]
+
+Target (issue 3): the 90 % intervals of N and K contain the truth 86-94 % of the time over at
+least 200 records. The record: 10 Hz, white noise, bias instability and a rate random walk
+that dominates the lowest frequencies, the default model. (When a term dominates only a
+handful of the lowest frequencies — this same sensor recorded for a quarter of the time —
+its interval is informed by a few periodogram ordinates and the prior, and its coverage
+drops to about 80 %; see the README.)
+"""
+
+import argparse
+import time
+
+import jax
+import numpy as np
+from scipy import stats
+
+import bayescal as bc
+from bayescal._noise_fit import DEFAULT_TERMS, fit_noise
+from bayescal._noise_model import NoiseModel
+
+RATE = 10.0
+TRUTH = {"bias": 0.4, "N": 0.005, "B": 2e-3, "K": 3e-4}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--simulations", type=int, default=200)
+    parser.add_argument("--samples", type=int, default=2**16)
+    args = parser.parse_args()
+
+    model = NoiseModel(rate_hz=RATE, **TRUTH)
+    names = ("N", "B", "K", "bias")
+    inside = {name: 0 for name in names}
+    student, unhealthy = 0, 0
+    start = time.perf_counter()
+    for seed in range(args.simulations):
+        values = np.asarray(model.simulate(jax.random.PRNGKey(20_000 + seed), args.samples))
+        fit = fit_noise(
+            values, RATE, bc.allan_deviation(values, RATE), terms=DEFAULT_TERMS, seed=seed
+        )
+        unhealthy += not fit.diagnostics.passed
+        for name in names:
+            summary = fit.parameters[name]
+            inside[name] += summary.q05 <= TRUTH[name] <= summary.q95
+        _, low, high = bc.student_t_interval(values, 0.90)
+        student += low <= TRUTH["bias"] <= high
+    elapsed = time.perf_counter() - start
+
+    count = args.simulations
+    band = stats.binom.ppf([0.025, 0.975], count, 0.9) / count
+    print(
+        f"noise coverage: {count} simulations of {args.samples} samples at {RATE:g} Hz "
+        f"(N={TRUTH['N']} deg/s/sqrt(Hz), B={TRUTH['B']} deg/s, K={TRUTH['K']} "
+        f"deg/s*sqrt(Hz)); {elapsed:.0f} s; {unhealthy} posterior(s) failed their health checks"
+    )
+    print(
+        f"  a calibrated 90 % interval covers [{band[0]:.3f}, {band[1]:.3f}] of records "
+        "with 95 % probability"
+    )
+    for name in names:
+        print(
+            f"  90 % credible interval of {name:<5} contains the truth {inside[name] / count:.3f}"
+        )
+    print(f"  90 % Student-t interval of the bias contains the turn-on bias {student / count:.3f}")
+
+
+if __name__ == "__main__":
+    main()

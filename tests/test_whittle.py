@@ -1,0 +1,107 @@
+"""The spectral likelihood: binning is exact to well below the statistical error, the
+expected periodogram is what simulated periodograms average to, and the closed-form
+autocovariances are the Fourier pairs of the spectra."""
+
+import jax
+import numpy as np
+import pytest
+from scipy import fft
+from scipy.signal import windows
+
+from bayescal._noise_model import (
+    SPECTRAL_COMPONENTS,
+    NoiseModel,
+    _t2_log_fourth_difference,
+    component_weights,
+    increment_autocovariance_shapes,
+    increment_spectrum_shapes,
+)
+from bayescal._whittle import (
+    TAPER_FRACTION,
+    _expected_periodogram,
+    spectral_summary,
+    whittle_log_likelihood,
+)
+
+RATE = 100.0
+TRUE = {"N": 0.005, "B": 5e-4, "K": 5e-6, "Q": 1e-5, "F": 0.2}
+
+
+def variances(**scale):
+    return np.asarray(component_weights(**{p: v * scale.get(p, 1.0) for p, v in TRUE.items()}))
+
+
+@pytest.fixture(scope="module")
+def record():
+    model = NoiseModel(rate_hz=RATE, bias=0.3, **TRUE)
+    return np.asarray(model.simulate(jax.random.PRNGKey(0), 2**15))
+
+
+def test_binning_matches_every_frequency(record):
+    binned = spectral_summary(record, RATE)
+    exact = spectral_summary(record, RATE, bin_width=1e-12)
+    assert binned.n_bins < exact.n_bins / 40
+    base = variances()
+    for change in ({"N": 1.01}, {"B": 1.5}, {"K": 3.0}, {"Q": 0.3, "N": 0.99}, {"F": 0.5}):
+        shifted = variances(**change)
+        difference_binned = float(
+            np.sum(whittle_log_likelihood(binned, shifted))
+            - np.sum(whittle_log_likelihood(binned, base))
+        )
+        difference_exact = float(
+            np.sum(whittle_log_likelihood(exact, shifted))
+            - np.sum(whittle_log_likelihood(exact, base))
+        )
+        assert difference_binned == pytest.approx(difference_exact, abs=1e-3)
+
+
+def test_expected_periodogram_is_the_average_periodogram():
+    """The debiased likelihood's S_j: tapered periodograms of simulated increments average
+    to it, down to the lowest frequencies (where leakage would otherwise dominate)."""
+    n, replicas = 1024, 4000
+    model = NoiseModel(rate_hz=RATE, N=0.01, K=1e-3, B=2e-3, F=0.3)
+    samples = np.asarray(
+        jax.jit(jax.vmap(lambda key: model.simulate(key, n)))(
+            jax.random.split(jax.random.PRNGKey(5), replicas)
+        )
+    )
+    increments = np.diff(samples, axis=1)
+    taper = windows.tukey(increments.shape[1], TAPER_FRACTION)
+    centred = increments - (increments @ taper / taper.sum())[:, None]
+    periodogram = np.abs(fft.rfft(taper * centred, axis=1)) ** 2 / np.sum(taper**2)
+    index = np.arange(1, 40)
+    basis = _expected_periodogram(taper, RATE, index)
+    expected = np.asarray(component_weights(N=0.01, B=2e-3, K=1e-3, F=0.3)) @ basis
+    mean = periodogram[:, index].mean(axis=0)
+    standard_error = periodogram[:, index].std(axis=0) / np.sqrt(replicas)
+    assert np.all(np.abs(mean - expected) < 4 * standard_error)
+
+
+def test_autocovariances_are_fourier_pairs_of_the_spectra():
+    size = 2**15
+    nu = np.arange(1, size // 2 + 1) / size
+    weight = np.where(nu == 0.5, 0.5, 1.0)  # trapezoid rule; the zero-frequency end is added
+    shapes = increment_spectrum_shapes(nu, RATE)
+    at_zero = increment_spectrum_shapes(np.array([1e-12]), RATE)
+    lags = np.arange(8)
+    autocovariance = increment_autocovariance_shapes(lags, RATE)
+    for term in SPECTRAL_COMPONENTS:
+        spectrum = np.asarray(shapes[term]) * weight
+        zero = 0.5 * float(np.asarray(at_zero[term])[0])
+        numeric = [
+            2 * (zero + np.sum(spectrum * np.cos(2 * np.pi * nu * lag))) / size for lag in lags
+        ]
+        scale = abs(autocovariance[term][0])
+        np.testing.assert_allclose(numeric, autocovariance[term], atol=1e-4 * scale)
+
+
+def test_flicker_difference_far_from_zero_uses_a_series_that_joins_the_direct_value():
+    t = np.arange(20, 40, dtype=np.longdouble)
+
+    def t2_log(x):
+        return x * x * np.log(x)
+
+    direct = t2_log(t + 2) - 4 * t2_log(t + 1) + 6 * t2_log(t) - 4 * t2_log(t - 1) + t2_log(t - 2)
+    np.testing.assert_allclose(
+        _t2_log_fourth_difference(t.astype(float)), direct.astype(float), rtol=1e-9
+    )

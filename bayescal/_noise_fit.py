@@ -388,6 +388,21 @@ def fit_noise(
     priors). The same inputs and ``seed`` give the same result.
     """
     problem = noise_problem(values, rate_hz, allan, terms=terms, prior=prior)
+    return sample_noise(
+        problem, terms=terms, seed=seed, n_walkers=n_walkers, max_steps=max_steps, progress=progress
+    )
+
+
+def sample_noise(
+    problem: NoiseProblem,
+    *,
+    terms: tuple[str, ...],
+    seed: int = 0,
+    n_walkers: int = 32,
+    max_steps: int = 40_000,
+    progress: bool = False,
+) -> NoiseFit:
+    """MAP, Laplace covariance and emcee posterior of a :class:`NoiseProblem`, checked."""
     rng = np.random.default_rng(seed)
     estimate = point_estimate(problem)
     n_walkers = max(n_walkers, 2 * estimate.theta.size + 2)

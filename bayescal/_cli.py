@@ -9,6 +9,8 @@ import argparse
 import os
 import sys
 
+import numpy as np
+
 from ._errors import BayescalError, InputError
 
 INTERNAL_ERROR = 3
@@ -177,6 +179,39 @@ def build_parser() -> argparse.ArgumentParser:
     bayes.add_argument("--classical-only", action="store_true", help="skip the Bayesian model")
     bayes.add_argument("--quiet", action="store_true", help="no progress bar")
     noise.set_defaults(run=_run_noise)
+    two = commands.add_parser(
+        "two-position",
+        help="accelerometer scale and offset from an up and a down section",
+        description="Two-position calibration of one accelerometer axis: classical (means, "
+        "span, scale 2 g/span, offset) and Bayesian, with local gravity from latitude and height.",
+    )
+    two.add_argument("file", nargs="?", help="one recording holding both positions")
+    two.add_argument("--up", metavar="FILE", help="recording of the axis pointing up")
+    two.add_argument("--down", metavar="FILE", help="recording of the axis pointing down")
+    two.add_argument(
+        "--sections",
+        metavar="U0:U1,D0:D1",
+        help="up and down sections of FILE in seconds (default: found)",
+    )
+    two.add_argument("--channel", required=True, help="accelerometer column, e.g. acc_z")
+    two.add_argument("--unit", help="unit of the channel (m/s^2, g, or a count unit such as LSB)")
+    two.add_argument("--rate", type=_positive_float, metavar="HZ")
+    two.add_argument("--time-column", metavar="NAME")
+    two.add_argument("--time-unit", metavar="UNIT")
+    two.add_argument("--latitude", type=float, metavar="DEG", help="geodetic latitude")
+    two.add_argument("--height", type=float, metavar="M", help="height above the ellipsoid")
+    two.add_argument("--g-local", metavar="VALUE[±U]", help="local gravity in m/s^2 instead")
+    two.add_argument("--confidence", type=_confidence, default=0.95)
+    two.add_argument(
+        "--terms",
+        default="white,bias_instability,rate_random_walk",
+        help="noise terms of the Bayesian model (as for noise)",
+    )
+    two.add_argument("--seed", type=int, default=0)
+    two.add_argument("--classical-only", action="store_true")
+    two.add_argument("--quiet", action="store_true")
+    two.add_argument("--json", metavar="PATH")
+    two.set_defaults(run=_run_two_position)
     sensors = commands.add_parser("sensors", help="list the sensor cards (datasheet priors)")
     sensors.set_defaults(run=_run_sensors)
     return parser
@@ -326,6 +361,97 @@ def _write_folder(folder, result, fit, data) -> None:
         tree = noise_datatree(fit, data.unit, channel=data.channel, source=data.source)
         write_netcdf(tree, folder / f"{stem}_posterior.nc")
     write_json(folder / f"{stem}.json", result)
+
+
+def _read_channel(path, args):
+    from ._recording import load_table, prepare_channel
+
+    table = load_table(path)
+    return table, prepare_channel(
+        table,
+        args.channel,
+        unit=args.unit,
+        rate=args.rate,
+        time_column=args.time_column,
+        time_unit=args.time_unit,
+    )
+
+
+def _run_two_position(args) -> int:
+    from ._gravity import local_gravity
+    from ._noise_fit import parse_terms
+    from ._output import check_writable, write_json
+    from ._pad import find_accelerometer_columns
+    from ._two_position import (
+        Section,
+        bayesian_two_position,
+        check_sections,
+        classical_two_position,
+    )
+    from ._two_position_command import sections_from_file, two_position_result, two_position_text
+
+    terms = parse_terms(args.terms)
+    if args.json:
+        check_writable(args.json, "--json")
+    gravity = local_gravity(args.latitude, args.height, args.g_local)
+    if args.file and (args.up or args.down):
+        raise InputError("give one FILE or --up and --down, not both")
+    if args.file:
+        table, data = _read_channel(args.file, args)
+        columns = find_accelerometer_columns(table)
+        still_on = None
+        if columns and not np.isnan(data.values).any() and data.values.size == table.n_rows:
+            still_on = np.column_stack([table.columns[name] for name in columns])
+        up, down, found_by = sections_from_file(data, still_on, args.sections)
+        gap_s = down.start_s - up.start_s
+        rate, unit = data.rate_hz, data.unit
+    else:
+        if not (args.up and args.down):
+            missing = "--down" if args.up else "--up"
+            raise InputError(
+                f"one section is missing: no {missing} recording",
+                fix="give --up FILE and --down FILE, or one FILE holding both",
+            )
+        _, up_data = _read_channel(args.up, args)
+        _, down_data = _read_channel(args.down, args)
+        if abs(up_data.rate_hz / down_data.rate_hz - 1) > 0.01 or up_data.unit != down_data.unit:
+            raise InputError(
+                f"--up and --down differ: {up_data.rate_hz:g} Hz {up_data.unit} "
+                f"against {down_data.rate_hz:g} Hz {down_data.unit}",
+                fix="record both positions with the same settings",
+            )
+        up = Section(up_data.values, up_data.start_s, up_data.source)
+        down = Section(down_data.values, down_data.start_s, down_data.source)
+        found_by, gap_s = "--up and --down files", None
+        rate, unit = up_data.rate_hz, up_data.unit
+    check_sections(up, down, unit, args.channel)
+    classical = classical_two_position(up.values, down.values, gravity, args.confidence)
+    bayesian = None
+    if not args.classical_only:
+        bayesian = bayesian_two_position(
+            up,
+            down,
+            rate,
+            gravity,
+            terms=terms,
+            gap_s=gap_s,
+            seed=args.seed,
+            progress=not args.quiet and sys.stderr.isatty(),
+        )
+    result = two_position_result(
+        args.channel, unit, rate, up, down, found_by, gravity, args.confidence, classical, bayesian
+    )
+    if args.json:
+        write_json(args.json, result)
+    print(two_position_text(result))
+    if bayesian is not None and not bayesian.noise.diagnostics.passed:
+        print(
+            "bayescal two-position: HEALTH CHECK FAILED: "
+            + "; ".join(bayesian.noise.diagnostics.failures),
+            file=sys.stderr,
+        )
+        return 1
+    return 0
 
 
 def _run_sensors(args) -> int:

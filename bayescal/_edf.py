@@ -249,6 +249,8 @@ def _b1_noise_exponent(phase: np.ndarray, m: int) -> int:
     if mu > -2:
         return -mu - 1
     second = phase[2 * m :] - 2 * phase[m:-m] + phase[: -2 * m]
+    if second.size <= m:
+        return 2  # too short for R(n): phase noise, taken as white
     window = np.concatenate(([0.0], np.cumsum(second)))
     modified = np.mean((window[m:] - window[:-m]) ** 2) / m**2
     ratio = modified / np.mean(second**2)

@@ -86,10 +86,7 @@ def _bayesian_block(fit: NoiseFit, unit: str) -> dict:
                 for label in display_values(name, summary.mean, unit)
             }
         parameters[name] = entry
-    diagnostics = {
-        field: (list(value) if isinstance(value, tuple) else value)
-        for field, value in vars(fit.diagnostics).items()
-    }
+    diagnostics = fit.diagnostics.as_dict()
     diagnostics["sampler"] = "emcee ensemble, differential-evolution and snooker moves"
     diagnostics["criteria"] = {
         "max_rhat": 1.01,

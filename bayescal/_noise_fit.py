@@ -14,19 +14,17 @@ is flat.
 """
 
 import math
-import sys
 
-import emcee
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
-from arviz_stats.base import array_stats
 
 from ._allan import DeviationResult
 from ._errors import InputError
 from ._level import LevelSummary, bias_given_noise, level_summary
+from ._mcmc import Diagnostics, diagnose, sample_ensemble, walker_count
 from ._noise_model import component_weights
 from ._whittle import SpectralSummary, spectral_summary, whittle_log_likelihood
 
@@ -70,15 +68,6 @@ ALL_TERMS = (
 )
 PRIOR_LOG_SD = 4.0
 RAMP_PRIOR_FACTOR = 10.0
-
-# Health checks of a posterior (Vehtari et al. 2021 for R-hat and ESS; emcee's guidance for
-# the autocorrelation time and the acceptance fraction).
-MAX_RHAT = 1.01
-MIN_ESS = 400
-ACCEPTANCE_RANGE = (0.1, 0.8)
-AUTOCORR_MULTIPLE = 50
-RHAT_GROUPS = 4
-MAX_STORED_DRAWS = 2000
 
 
 def parse_terms(spec: str) -> tuple[str, ...]:
@@ -201,23 +190,6 @@ class ParameterSummary(eqx.Module):
     """Laplace (Hessian) standard deviation at the MAP, by the delta method."""
 
 
-class Diagnostics(eqx.Module):
-    passed: bool
-    failures: tuple[str, ...]
-    converged: bool
-    n_walkers: int
-    n_steps: int
-    burn_in: int
-    thin: int
-    """Steps between the posterior draws kept (about)."""
-    autocorr_time: dict
-    ess_bulk: dict
-    rhat: dict
-    acceptance_fraction: float
-    min_walker_acceptance: float
-    map_converged: bool
-
-
 class NoiseFit(eqx.Module):
     """Posterior of the noise model of one channel, with its point estimate and checks."""
 
@@ -292,48 +264,6 @@ def _bias_at(problem: NoiseProblem, theta):
     return mean, variance, mean - bias_given_noise(problem.level, variances, ramp + 1.0)[0]
 
 
-def _sample(problem, start, covariance, rng, n_walkers, max_steps, progress):
-    dimension = start.size
-    # Differential-evolution moves (ter Braak 2006) with a share of snooker updates: their
-    # autocorrelation times here are a third of the stretch move's (about 20 against 50).
-    sampler = emcee.EnsembleSampler(
-        n_walkers,
-        dimension,
-        lambda theta: np.asarray(_batch_log_posterior(problem, jnp.asarray(theta))),
-        vectorize=True,
-        moves=[(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)],
-    )
-    sampler.random_state = np.random.RandomState(rng.integers(2**31)).get_state()
-    spread = np.linalg.cholesky(covariance + 1e-12 * np.eye(dimension))
-    state = start + rng.standard_normal((n_walkers, dimension)) @ spread.T
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(
-            total=max_steps, desc="posterior (emcee)", unit="step", leave=False, file=sys.stderr
-        )
-    # Converged when the run is longer than AUTOCORR_MULTIPLE autocorrelation times, by the
-    # estimate at two successive checks (a single estimate from a short run is itself noisy).
-    longer_before, converged, chunk = False, False, 250
-    while sampler.iteration < max_steps:
-        state = sampler.run_mcmc(state, min(chunk, max_steps - sampler.iteration))
-        if bar is not None:
-            bar.update(chunk)
-        tau = sampler.get_autocorr_time(tol=0)
-        longer = bool(
-            np.all(np.isfinite(tau)) and sampler.iteration > AUTOCORR_MULTIPLE * np.max(tau)
-        )
-        if longer and longer_before:
-            converged = True
-            break
-        longer_before = longer
-        chunk = max(chunk, int(sampler.iteration // 4))
-    if bar is not None:
-        bar.close()
-    return sampler, converged
-
-
 def noise_problem(
     values,
     rate_hz: float,
@@ -405,12 +335,16 @@ def sample_noise(
     """MAP, Laplace covariance and emcee posterior of a :class:`NoiseProblem`, checked."""
     rng = np.random.default_rng(seed)
     estimate = point_estimate(problem)
-    n_walkers = max(n_walkers, 2 * estimate.theta.size + 2)
-    n_walkers += -n_walkers % RHAT_GROUPS
-    sampler, converged = _sample(
-        problem, estimate.theta, estimate.covariance, rng, n_walkers, max_steps, progress
+    sampler, converged = sample_ensemble(
+        lambda theta: _batch_log_posterior(problem, jnp.asarray(theta)),
+        estimate.theta,
+        estimate.covariance,
+        rng,
+        walker_count(estimate.theta.size, n_walkers),
+        max_steps,
+        progress,
     )
-    diagnostics, kept = _diagnose(sampler, problem.parameters, converged, estimate.converged)
+    diagnostics, kept = diagnose(sampler, problem.parameters, converged, estimate.converged)
     natural, pointwise, log_posterior = _draw_quantities(
         problem, jnp.asarray(kept), jax.random.PRNGKey(int(rng.integers(2**31)))
     )
@@ -439,56 +373,6 @@ def sample_noise(
         terms=tuple(terms),
         seed=seed,
     )
-
-
-def _diagnose(sampler, names, converged: bool, map_converged: bool):
-    """The health checks of an emcee run, and the draws kept from it, (walkers, draws, dim):
-    the same number for every run, so that the functions of them compile once."""
-    tau = sampler.get_autocorr_time(tol=0)
-    burn_in = math.ceil(2 * np.max(tau)) if np.all(np.isfinite(tau)) else sampler.iteration // 2
-    burn_in = min(burn_in, sampler.iteration // 2)
-    by_walker = np.moveaxis(sampler.get_chain(discard=burn_in), 0, 1)
-    steps = by_walker.shape[1]
-    kept = np.unique(np.linspace(0, steps - 1, MAX_STORED_DRAWS // by_walker.shape[0]).round())
-    groups = by_walker.reshape(RHAT_GROUPS, -1, by_walker.shape[2])
-    ess, rhat = {}, {}
-    for i, name in enumerate(names):
-        ess[name] = float(array_stats.ess(by_walker[..., i], chain_axis=0, draw_axis=1))
-        rhat[name] = float(array_stats.rhat(groups[..., i], chain_axis=0, draw_axis=1))
-    acceptance = sampler.acceptance_fraction
-    failures = []
-    if not converged:
-        failures.append(
-            f"autocorrelation-time criterion not met in {sampler.iteration} steps "
-            f"(needs {AUTOCORR_MULTIPLE} x tau = {AUTOCORR_MULTIPLE * np.max(tau):.0f})"
-        )
-    for name in names:
-        if not ess[name] >= MIN_ESS:
-            failures.append(f"effective sample size of {name} is {ess[name]:.0f} (< {MIN_ESS})")
-        if not rhat[name] <= MAX_RHAT:
-            failures.append(
-                f"R-hat of {name} across walker groups is {rhat[name]:.3f} (> {MAX_RHAT})"
-            )
-    if not ACCEPTANCE_RANGE[0] <= float(np.mean(acceptance)) <= ACCEPTANCE_RANGE[1]:
-        failures.append(f"acceptance fraction {np.mean(acceptance):.2f} outside {ACCEPTANCE_RANGE}")
-    if not map_converged:
-        failures.append("the MAP optimisation did not converge")
-    diagnostics = Diagnostics(
-        passed=not failures,
-        failures=tuple(failures),
-        converged=converged,
-        n_walkers=acceptance.size,
-        n_steps=int(sampler.iteration),
-        burn_in=burn_in,
-        thin=max(1, steps // kept.size),
-        autocorr_time={name: float(t) for name, t in zip(names, tau, strict=True)},
-        ess_bulk=ess,
-        rhat=rhat,
-        acceptance_fraction=float(np.mean(acceptance)),
-        min_walker_acceptance=float(np.min(acceptance)),
-        map_converged=map_converged,
-    )
-    return diagnostics, by_walker[:, kept.astype(int)]
 
 
 def _map_summary(problem: NoiseProblem, estimate: PointEstimate) -> tuple[dict, dict]:

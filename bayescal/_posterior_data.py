@@ -61,7 +61,7 @@ def noise_datatree(fit: NoiseFit, unit: str, *, channel: str, source: str):
                 "prior": fit.problem.prior.description,
                 "seed": fit.seed,
                 "rate_hz": spectral.rate_hz,
-                "diagnostics": json.dumps(_plain(fit.diagnostics)),
+                "diagnostics": json.dumps(fit.diagnostics.as_dict()),
                 "log_likelihood_terms": f"{n_bins} frequency bins, then one mean-increment "
                 "term per segment",
             }
@@ -70,13 +70,6 @@ def noise_datatree(fit: NoiseFit, unit: str, *, channel: str, source: str):
     for name, parameter_unit in units.items():
         tree["posterior"][name].attrs["units"] = parameter_unit
     return tree
-
-
-def _plain(diagnostics) -> dict:
-    return {
-        field: (list(value) if isinstance(value, tuple) else value)
-        for field, value in vars(diagnostics).items()
-    }
 
 
 def write_netcdf(tree, path: str | os.PathLike) -> None:

@@ -55,7 +55,8 @@ def local_gravity(
     if given is not None:
         if latitude_deg is not None:
             raise InputError("give --g-local or --latitude/--height, not both")
-        match = re.fullmatch(r"\s*([-+0-9.eE]+)\s*(?:(?:±|\+-|\+/-)\s*([0-9.eE]+))?\s*", given)
+        number = r"[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"
+        match = re.fullmatch(rf"\s*({number})\s*(?:(?:±|\+-|\+/-)\s*({number}))?\s*", given)
         try:
             value = float(match[1]) if match else math.nan
             uncertainty = float(match[2]) if match and match[2] else 0.0

@@ -212,6 +212,9 @@ def build_parser() -> argparse.ArgumentParser:
     two.add_argument("--quiet", action="store_true")
     two.add_argument("--json", metavar="PATH")
     two.set_defaults(run=_run_two_position)
+    from . import _thermal_command
+
+    _thermal_command.add_parser(commands)
     sensors = commands.add_parser("sensors", help="list the sensor cards (datasheet priors)")
     sensors.set_defaults(run=_run_sensors)
     return parser
@@ -482,19 +485,23 @@ def _enable_compilation_cache() -> None:
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
 
 
+def _command(args) -> str:
+    return " ".join(part for part in (args.command, getattr(args, "step", None)) if part)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     _enable_compilation_cache()
     try:
         return args.run(args)
     except BayescalError as error:
-        print(f"bayescal {args.command}: error: {error}", file=sys.stderr)
+        print(f"bayescal {_command(args)}: error: {error}", file=sys.stderr)
         return error.exit_code
     except Exception as error:
         if os.environ.get("BAYESCAL_DEBUG"):
             raise
         print(
-            f"bayescal {args.command}: internal error (a bug, please report it): "
+            f"bayescal {_command(args)}: internal error (a bug, please report it): "
             f"{type(error).__name__}: {error}; set BAYESCAL_DEBUG=1 for the traceback",
             file=sys.stderr,
         )

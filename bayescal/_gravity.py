@@ -13,10 +13,10 @@ metre — within the stated uncertainty.
 """
 
 import math
-import re
 from dataclasses import dataclass
 
 from ._errors import InputError
+from ._units import parse_measurement
 
 # WGS84 defining and derived constants (NIMA TR8350.2, tables 3.1-3.3).
 SEMI_MAJOR_AXIS = 6378137.0  # m
@@ -55,13 +55,11 @@ def local_gravity(
     if given is not None:
         if latitude_deg is not None:
             raise InputError("give --g-local or --latitude/--height, not both")
-        number = r"[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"
-        match = re.fullmatch(rf"\s*({number})\s*(?:(?:±|\+-|\+/-)\s*({number}))?\s*", given)
         try:
-            value = float(match[1]) if match else math.nan
-            uncertainty = float(match[2]) if match and match[2] else 0.0
+            value, uncertainty = parse_measurement(given)
         except ValueError:
-            value = math.nan
+            value, uncertainty = math.nan, None
+        uncertainty = uncertainty or 0.0
         if not 9.7 < value < 9.9:
             raise InputError(
                 f"--g-local {given!r} is not a gravity in m/s^2 (9.7 to 9.9)",

@@ -60,16 +60,11 @@ def _t2_log(t):
     return np.where(t == 0, 0, t * t * np.log(np.where(t == 0, 1, np.abs(t))))
 
 
-def level_summary(values, rate_hz: float) -> LevelSummary:
-    """Block means of a rate series (NaN marks missing samples) and their covariance bases."""
-    values = np.asarray(values, dtype=float)
-    blocks = np.array(_block_edges(values), dtype=np.int64)
-    start, stop = blocks[:, 0], blocks[:, 1]
+def block_covariance_basis(start: np.ndarray, stop: np.ndarray, rate_hz: float) -> np.ndarray:
+    """(components, blocks, blocks): covariance of the means of samples [start, stop) per unit
+    weight of each spectral component, the nonstationary terms started at sample 0."""
     size = (stop - start).astype(float)
     period = 1.0 / rate_hz
-    means = np.array([values[a:b].mean() for a, b in blocks])
-    times = period * (start + stop) / 2.0
-
     same = np.equal.outer(start, start)
     white = np.diag(rate_hz / size)
     touching = np.equal.outer(stop, start) | np.equal.outer(start, stop)
@@ -105,10 +100,18 @@ def level_summary(values, rate_hz: float) -> LevelSummary:
         "rate_random_walk": walk,
         "bias_instability": np.asarray(flicker, dtype=float),
     }
+    return np.stack([basis[term] for term in SPECTRAL_COMPONENTS])
+
+
+def level_summary(values, rate_hz: float) -> LevelSummary:
+    """Block means of a rate series (NaN marks missing samples) and their covariance bases."""
+    values = np.asarray(values, dtype=float)
+    blocks = np.array(_block_edges(values), dtype=np.int64)
+    start, stop = blocks[:, 0], blocks[:, 1]
     return LevelSummary(
-        block_mean=means,
-        block_time_s=times,
-        basis=np.stack([basis[term] for term in SPECTRAL_COMPONENTS]),
+        block_mean=np.array([values[a:b].mean() for a, b in blocks]),
+        block_time_s=(start + stop) / 2.0 / rate_hz,
+        basis=block_covariance_basis(start, stop, rate_hz),
     )
 
 

@@ -10,9 +10,10 @@ from the stationary noise model, whose parameters the two sections share (one Wh
 likelihood over both). Given the noise, each section's level is Gaussian (its turn-on level,
 :mod:`bayescal._level`); g_local has its prior (the data cannot tell it from the scale); when
 both sections come from one file, the offset is allowed to drift between their starts by the
-noise model's own random walk and flicker over that time. The posterior of scale and offset
-follows draw by draw, which carries correlated noise into them — the part the classical RMS
-uncertainty, built on independent samples, leaves out.
+noise model's own random walk and flicker over that time. The offset is the one at the start
+of the up section (the turn-on convention of the noise model). The posterior of scale and
+offset follows draw by draw, which carries correlated noise into them — the part the classical
+RMS uncertainty, built on independent samples, leaves out.
 """
 
 import math
@@ -186,7 +187,7 @@ def bayesian_two_position(
     span = level_up - level_down + drift_draw
     draws = {
         "scale": 2 * g_local / span,
-        "offset": (level_up + level_down) / 2,
+        "offset": (level_up + level_down - drift_draw) / 2,
         "g_local": g_local,
         "level_up": level_up,
         "level_down": level_down,
@@ -207,7 +208,7 @@ def bayesian_two_position(
     map_sd = {
         "scale": scale_map
         * math.hypot(math.sqrt(span_var) / span_map, gravity.uncertainty / gravity.value),
-        "offset": math.sqrt(float(up_var + down_var)) / 2,
+        "offset": math.sqrt(float(up_var + down_var + drift_at_map)) / 2,
         "g_local": gravity.uncertainty,
     }
     return BayesianTwoPosition(draws, map_values, map_sd, noise)

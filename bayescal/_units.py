@@ -7,6 +7,7 @@ Q in U·s, N in U/√Hz, B in U, K in U·√Hz, R in U/s (written in ASCII, e.g.
 """
 
 import math
+import re
 from dataclasses import dataclass
 
 STANDARD_GRAVITY = 9.80665  # m/s^2, CGPM 1901 (the unit "g")
@@ -228,3 +229,15 @@ def card_value_in(parameter: str, value: float, card_unit: str, channel_unit: st
     if not channel.known:
         raise ValueError(f"the channel's unit '{channel_unit}' is not a physical unit")
     return value * factors[card_unit] / channel.to_si
+
+
+_NUMBER = r"[-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"
+_MEASUREMENT = re.compile(rf"\s*({_NUMBER})\s*(?:(?:±|\+-|\+/-)\s*({_NUMBER}))?\s*")
+
+
+def parse_measurement(text: str) -> tuple[float, float | None]:
+    """'VALUE±U' (also written VALUE+-U or VALUE+/-U) -> (value, uncertainty or None)."""
+    match = _MEASUREMENT.fullmatch(text)
+    if match is None:
+        raise ValueError(f"{text!r} is not VALUE or VALUE±UNCERTAINTY")
+    return float(match[1]), float(match[2]) if match[2] is not None else None

@@ -1,0 +1,437 @@
+"""Thermal gyro bias: a polynomial in temperature, fitted beside the stationary noise, updated
+in the field, and used to compensate the gyro output.
+
+Model: y(t) = sum_j c_j (T(t) - T0)^j + o_p + e(t), where e is the stationary noise of
+:mod:`bayescal._noise_model` (white, output filter, flicker, rate random walk, quantization),
+o_p a common offset of period p (in-field updates only; the heading-error equivalent an
+alignment cannot see) and T the measured temperature. An optional known Earth rate
+(15.041 deg/h projected on the axis) is taken off y first, so that it does not pass for bias.
+
+Likelihood. Temperature changes slowly, so the record is cut into blocks short enough that the
+temperature barely moves within one (at most 96 blocks per record); the block means have an
+exact Gaussian covariance given the noise parameters (:func:`bayescal._level.
+block_covariance_basis`), in which a random walk is a random walk — it cannot pass for a
+thermal slope, whose signature is that it follows the temperature. Above the blocks'
+frequencies the Whittle likelihood of the increments adds what the fast noise says. The
+coefficients (and offsets) enter linearly with a Gaussian (or flat) prior, so they are
+integrated out exactly for each value of the noise parameters: the noise parameters are
+sampled (emcee), the coefficients drawn from their Gaussian conditional. With white noise
+only, fixed, the posterior is Gaussian in closed form.
+
+Degree. With ``degree="auto"`` each degree 0..4 is scored by its expected log predictive
+density computed one block ahead (the prequential score p(z_k | z_1..k-1): leave-future-out,
+valid for correlated noise, where leave-one-out is not), at its MAP noise; the lowest degree
+within max(4, 2 standard errors) of the best is chosen.
+"""
+
+import math
+from dataclasses import dataclass
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+
+from ._errors import InputError
+from ._level import block_covariance_basis
+from ._noise_fit import NoisePrior, default_prior
+from ._noise_model import component_weights
+from ._units import parse_unit
+from ._whittle import spectral_summary, whittle_log_likelihood
+
+EARTH_RATE = 7.2921150e-5  # rad/s (15.041 deg/h), IERS
+MAX_BLOCKS = 96
+MAX_DEGREE = 4
+_AXES = {
+    "up": (0, 0, 1),
+    "down": (0, 0, -1),
+    "north": (0, 1, 0),
+    "south": (0, -1, 0),
+    "east": (1, 0, 0),
+    "west": (-1, 0, 0),
+}
+
+
+def earth_rate_on_axis(latitude_deg: float, axis: str, unit: str) -> float:
+    """The Earth's rotation rate seen by a gyro axis pointing along ``axis`` (up, down, north,
+    south, east, west, or east,north,up components), in the channel's ``unit``."""
+    if axis in _AXES:
+        direction = np.array(_AXES[axis], dtype=float)
+    else:
+        try:
+            direction = np.array([float(part) for part in axis.split(",")])
+        except ValueError:
+            direction = np.zeros(0)
+        if direction.size != 3 or not np.linalg.norm(direction) > 0:
+            raise InputError(
+                f"--axis {axis!r}",
+                fix="give up, down, north, south, east, west, "
+                "or the axis direction as east,north,up components",
+            )
+        direction /= np.linalg.norm(direction)
+    parsed = parse_unit(unit)
+    if parsed.quantity != "angular_rate":
+        raise InputError(
+            f"the Earth rate needs an angular-rate channel, not '{unit}'",
+            fix="pass --unit deg/s (or rad/s) or leave out --latitude",
+        )
+    latitude = math.radians(latitude_deg)
+    earth = EARTH_RATE * np.array([0.0, math.cos(latitude), math.sin(latitude)])
+    return float(earth @ direction) / parsed.to_si
+
+
+@dataclass(frozen=True)
+class ThermalRecord:
+    """A rate channel and its temperature on one sample grid, cut into stationary periods."""
+
+    values: np.ndarray
+    temperature: np.ndarray
+    rate_hz: float
+    periods: tuple[tuple[int, int], ...]
+    """[start, stop) sample ranges; one period unless the record holds several alignments."""
+
+
+def check_temperature(temperature: np.ndarray, source: str, column: str) -> None:
+    present = temperature[~np.isnan(temperature)]
+    if present.size == 0 or np.ptp(present) == 0:
+        value = f" at {present[0]:g}" if present.size else ""
+        raise InputError(
+            f"the temperature is constant{value}: a thermal model needs the temperature to change",
+            source=source,
+            column=column,
+            fix="record while the sensor warms up or cools down",
+        )
+
+
+def _blocks(record: ThermalRecord) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Even blocks within each period, none spanning a missing sample: start, stop, period."""
+    total = sum(stop - start for start, stop in record.periods)
+    size = max(8, math.ceil(total / MAX_BLOCKS))
+    starts, stops, owners = [], [], []
+    present = ~np.isnan(record.values) & ~np.isnan(record.temperature)
+    for index, (start, stop) in enumerate(record.periods):
+        edges = np.flatnonzero(
+            np.diff(np.concatenate(([0], present[start:stop].astype(np.int8), [0])))
+        )
+        for run_start, run_stop in zip(edges[::2] + start, edges[1::2] + start, strict=True):
+            cuts = np.arange(run_start, run_stop, size)
+            for first in cuts:
+                last = min(first + size, run_stop)
+                if last - first >= size // 2:
+                    starts.append(first)
+                    stops.append(last)
+                    owners.append(index)
+    return np.array(starts), np.array(stops), np.array(owners)
+
+
+class ThermalProblem(eqx.Module):
+    """Log marginal posterior of the noise parameters with the regression integrated out."""
+
+    block_mean: np.ndarray
+    design: np.ndarray
+    """(blocks, regressors): block means of (T - T0)^j, then one indicator per period offset."""
+    basis: np.ndarray
+    """(components, blocks, blocks) covariance per unit component weight (per period)."""
+    spectral: object
+    prior_mean: np.ndarray
+    prior_precision: np.ndarray
+    noise_prior: NoisePrior
+    high_bins: np.ndarray
+    """Weights that keep only the Whittle bins above the blocks' frequencies."""
+
+    def natural(self, theta):
+        transform = {"F": jnp.tanh}
+        return {
+            name: transform.get(name, jnp.exp)(theta[..., index])
+            for index, name in enumerate(self.noise_prior.parameters)
+        }
+
+    def weights(self, theta):
+        return component_weights(**self.natural(theta))
+
+    def conditional(self, theta):
+        """Precision and mean of the regression given the noise, and the pieces of the log
+        marginal likelihood."""
+        covariance = jnp.einsum("t,tij->ij", self.weights(theta), self.basis)
+        factor = jnp.linalg.cholesky(covariance)
+        whitened_design = jax.scipy.linalg.solve_triangular(factor, self.design, lower=True)
+        whitened_data = jax.scipy.linalg.solve_triangular(factor, self.block_mean, lower=True)
+        precision = self.prior_precision + whitened_design.T @ whitened_design
+        linear = whitened_design.T @ whitened_data + self.prior_precision @ self.prior_mean
+        mean = jnp.linalg.solve(precision, linear)
+        log_det = 2 * jnp.sum(jnp.log(jnp.diag(factor)))
+        quadratic = (
+            whitened_data @ whitened_data
+            + self.prior_mean @ self.prior_precision @ self.prior_mean
+            - linear @ mean
+        )
+        return precision, mean, log_det, quadratic
+
+    def log_posterior(self, theta):
+        precision, _, log_det, quadratic = self.conditional(theta)
+        _, log_det_precision = jnp.linalg.slogdet(precision)
+        levels = -0.5 * (log_det + log_det_precision + quadratic)
+        pointwise = whittle_log_likelihood(self.spectral, self.weights(theta))
+        fast = jnp.sum(pointwise[: self.high_bins.size] * self.high_bins)
+        prior = -0.5 * jnp.sum(((theta - self.noise_prior.location) / self.noise_prior.scale) ** 2)
+        value = levels + fast + prior
+        return jnp.where(jnp.isfinite(value), value, -jnp.inf)
+
+
+def thermal_problem(
+    record: ThermalRecord,
+    degree: int,
+    reference: float,
+    *,
+    noise_terms: tuple[str, ...],
+    allan,
+    coefficient_prior: tuple[np.ndarray, np.ndarray] | None = None,
+    offset_prior: list[tuple[float, float] | None] | None = None,
+    noise_prior: NoisePrior | None = None,
+    spectral=None,
+) -> ThermalProblem:
+    """Set up the likelihood. ``coefficient_prior`` is (mean, covariance) of c (flat when
+    None); ``offset_prior`` adds one offset per period, each N(m, u^2) when measured and flat
+    otherwise (then only the coefficient prior fixes the level); ``spectral`` reuses a
+    :func:`record_spectrum`."""
+    start, stop, owner = _blocks(record)
+    if start.size < degree + 3:
+        raise InputError(
+            f"{start.size} blocks of data are too few for degree {degree}",
+            fix="record longer or lower --degree",
+        )
+    block_mean = np.array(
+        [np.nanmean(record.values[a:b]) for a, b in zip(start, stop, strict=True)]
+    )
+    powers = np.array(
+        [
+            [np.nanmean((record.temperature[a:b] - reference) ** j) for j in range(degree + 1)]
+            for a, b in zip(start, stop, strict=True)
+        ]
+    )
+    # Periods are independent; the slow noise of each starts afresh at its first sample.
+    basis = np.zeros((5, start.size, start.size))
+    for period in np.unique(owner):
+        rows = np.flatnonzero(owner == period)
+        first = record.periods[period][0]
+        basis[:, rows[:, None], rows[None, :]] = block_covariance_basis(
+            start[rows] - first, stop[rows] - first, record.rate_hz
+        )
+    mean = np.zeros(degree + 1)
+    precision = np.zeros((degree + 1, degree + 1))
+    if coefficient_prior is not None:
+        mean, covariance = coefficient_prior
+        precision = np.linalg.inv(covariance)
+    design = powers
+    if offset_prior is not None:
+        indicators = np.equal.outer(owner, np.arange(len(record.periods))).astype(float)
+        design = np.hstack([powers, indicators])
+        offset_mean = np.array([p[0] if p else 0.0 for p in offset_prior])
+        offset_precision = np.array([1 / p[1] ** 2 if p else 0.0 for p in offset_prior])
+        mean = np.concatenate([mean, offset_mean])
+        precision = np.block(
+            [
+                [precision, np.zeros((degree + 1, offset_mean.size))],
+                [np.zeros((offset_mean.size, degree + 1)), np.diag(offset_precision)],
+            ]
+        )
+    if spectral is None:
+        spectral = record_spectrum(record)
+    block_seconds = float(np.median(stop - start)) / record.rate_hz
+    high = (spectral.frequency_hz > 1.0 / block_seconds).astype(float)
+    return ThermalProblem(
+        block_mean=block_mean,
+        design=design,
+        basis=basis,
+        spectral=spectral,
+        prior_mean=mean,
+        prior_precision=precision,
+        noise_prior=noise_prior or default_prior(noise_terms, allan),
+        high_bins=high,
+    )
+
+
+def record_spectrum(record: ThermalRecord):
+    """The Whittle summary of a record's periods (no increment bridges two periods)."""
+    joined = np.concatenate([np.append(record.values[a:b], np.nan) for a, b in record.periods])
+    return spectral_summary(joined, record.rate_hz)
+
+
+@eqx.filter_jit
+def _map(problem: ThermalProblem):
+    def objective(theta, _):
+        return -problem.log_posterior(theta)
+
+    solution = optx.minimise(
+        objective,
+        optx.BFGS(rtol=1e-9, atol=1e-9),
+        jnp.asarray(problem.noise_prior.location),
+        max_steps=2000,
+        throw=False,
+    )
+    hessian = jax.hessian(lambda theta: objective(theta, None))(solution.value)
+    return solution.value, hessian, solution.result == optx.RESULTS.successful
+
+
+@eqx.filter_jit
+def _batch(problem: ThermalProblem, theta):
+    return jax.vmap(problem.log_posterior)(theta)
+
+
+@eqx.filter_jit
+def _draw_regression(problem: ThermalProblem, theta, key):
+    """For each noise draw, a draw of the regression from its Gaussian conditional; also the
+    conditional means and covariances, whose mixture is the posterior."""
+
+    def one(theta_one, key_one):
+        precision, mean, _, _ = problem.conditional(theta_one)
+        covariance = jnp.linalg.inv(precision)
+        draw = mean + jnp.linalg.cholesky(covariance) @ jax.random.normal(key_one, mean.shape)
+        return draw, mean, covariance
+
+    keys = jax.random.split(key, theta.shape[0])
+    return jax.vmap(one)(theta, keys)
+
+
+def prequential_score(problem: ThermalProblem, theta, skip: int) -> np.ndarray:
+    """log p(z_k | z_1..k-1) for k > ``skip``, the regression integrated under its prior
+    (flat parts included: their improper constants cancel between k - 1 and k)."""
+    weights = np.asarray(problem.weights(jnp.asarray(theta)))
+    covariance = np.einsum("t,tij->ij", weights, problem.basis)
+    flat = int(np.sum(np.diag(problem.prior_precision) == 0))
+
+    def log_marginal(k):
+        sigma = covariance[:k, :k]
+        factor = np.linalg.cholesky(sigma)
+        design = np.linalg.solve(factor, problem.design[:k])
+        data = np.linalg.solve(factor, problem.block_mean[:k])
+        precision = problem.prior_precision + design.T @ design
+        linear = design.T @ data + problem.prior_precision @ problem.prior_mean
+        mean = np.linalg.solve(precision, linear)
+        _, log_det_precision = np.linalg.slogdet(precision)
+        quadratic = (
+            data @ data
+            + problem.prior_mean @ problem.prior_precision @ problem.prior_mean
+            - linear @ mean
+        )
+        return -0.5 * (
+            (k - flat) * math.log(2 * math.pi)
+            + 2 * np.sum(np.log(np.diag(factor)))
+            + log_det_precision
+            + quadratic
+        )
+
+    totals = np.array([log_marginal(k) for k in range(skip, problem.block_mean.size + 1)])
+    return np.diff(totals)
+
+
+@dataclass(frozen=True)
+class ThermalFit:
+    """Posterior of the thermal coefficients c_0..c_d (and period offsets) and the noise."""
+
+    degree: int
+    reference: float
+    coefficient_mean: np.ndarray
+    coefficient_covariance: np.ndarray
+    coefficient_draws: np.ndarray
+    """(draws, d + 1)"""
+    offset_mean: np.ndarray
+    offset_sd: np.ndarray
+    noise: dict
+    """noise parameter -> (mean, q05, q95) in the channel's units"""
+    map_coefficients: np.ndarray
+    map_covariance: np.ndarray
+    """Conditional covariance of the coefficients at the MAP noise (the Laplace answer)."""
+    diagnostics: object
+    degree_scores: dict
+    """degree -> (elpd, se of the difference to the best) when the degree was chosen"""
+
+
+def sample_thermal(
+    problem: ThermalProblem,
+    degree: int,
+    reference: float,
+    *,
+    seed: int,
+    max_steps: int = 40_000,
+    progress: bool = False,
+    degree_scores: dict | None = None,
+) -> ThermalFit:
+    """MAP and Laplace for the noise, emcee posterior, regression draws; checked."""
+    from ._mcmc import diagnose, sample_ensemble, walker_count
+
+    best, hessian, converged = _map(problem)
+    start, covariance = np.asarray(best), np.linalg.pinv(np.asarray(hessian))
+    rng = np.random.default_rng(seed)
+    sampler, done = sample_ensemble(
+        lambda theta: _batch(problem, jnp.asarray(theta)),
+        start,
+        covariance,
+        rng,
+        walker_count(start.size),
+        max_steps,
+        progress,
+    )
+    names = problem.noise_prior.parameters
+    diagnostics, kept = diagnose(sampler, names, done, bool(converged))
+    flat_theta = kept.reshape(-1, kept.shape[-1])
+    draws, means, covariances = (
+        np.asarray(x)
+        for x in _draw_regression(
+            problem, jnp.asarray(flat_theta), jax.random.PRNGKey(int(rng.integers(2**31)))
+        )
+    )
+    # The posterior of the regression is the mixture of its conditionals over the noise draws.
+    mean = means.mean(axis=0)
+    covariance_total = covariances.mean(axis=0) + np.cov(means.T, bias=True).reshape(
+        covariances.shape[1:]
+    )
+    coefficients = slice(0, degree + 1)
+    precision_map, mean_map, _, _ = problem.conditional(best)
+    map_covariance = np.linalg.inv(np.asarray(precision_map))
+    natural = {
+        name: np.asarray(value) for name, value in problem.natural(jnp.asarray(flat_theta)).items()
+    }
+    return ThermalFit(
+        degree=degree,
+        reference=reference,
+        coefficient_mean=mean[coefficients],
+        coefficient_covariance=covariance_total[coefficients, coefficients],
+        coefficient_draws=draws[:, coefficients],
+        offset_mean=mean[degree + 1 :],
+        offset_sd=np.sqrt(np.diag(covariance_total)[degree + 1 :]),
+        noise={
+            name: (float(v.mean()), float(np.quantile(v, 0.05)), float(np.quantile(v, 0.95)))
+            for name, v in natural.items()
+        },
+        map_coefficients=np.asarray(mean_map)[coefficients],
+        map_covariance=map_covariance[coefficients, coefficients],
+        diagnostics=diagnostics,
+        degree_scores=degree_scores or {},
+    )
+
+
+def choose_degree(
+    record: ThermalRecord, reference: float, *, noise_terms, allan
+) -> tuple[int, dict]:
+    """The lowest degree whose prequential ELPD is within max(4, 2 SE) of the best."""
+    skip = max(MAX_DEGREE + 2, math.ceil(0.1 * _blocks(record)[0].size))
+    scores = {}
+    spectral = record_spectrum(record)
+    for degree in range(MAX_DEGREE + 1):
+        problem = thermal_problem(
+            record, degree, reference, noise_terms=noise_terms, allan=allan, spectral=spectral
+        )
+        best, _, _ = _map(problem)
+        scores[degree] = prequential_score(problem, np.asarray(best), skip)
+    best = max(scores, key=lambda d: scores[d].sum())
+    table = {}
+    for degree, pointwise in scores.items():
+        difference = scores[best] - pointwise
+        table[degree] = (
+            float(pointwise.sum()),
+            float(math.sqrt(difference.size * np.var(difference))),
+        )
+    chosen = min(d for d, (elpd, se) in table.items() if table[best][0] - elpd < max(4.0, 2 * se))
+    return chosen, table

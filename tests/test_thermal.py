@@ -28,18 +28,26 @@ def warm_up(seed, n=2**14, walk=3e-4):
 def test_thermal_slope_recovered_beside_a_random_walk():
     values, temperature = warm_up(0)
     record = ThermalRecord(values, temperature, RATE, ((0, values.size),))
-    problem = thermal_problem(record, 1, 35.0, noise_terms=("white", "rate_random_walk"),
-                              allan=bc.allan_deviation(values, RATE))
+    problem = thermal_problem(
+        record,
+        1,
+        35.0,
+        noise_terms=("white", "rate_random_walk"),
+        allan=bc.allan_deviation(values, RATE),
+    )
     fit = sample_thermal(problem, 1, 35.0, seed=0)
     assert fit.diagnostics.passed, fit.diagnostics.failures
     low, high = np.quantile(fit.coefficient_draws[:, 1], [0.05, 0.95])
     assert low <= TRUTH[1] <= high
     # A model blind to the random walk (white noise only) is far more confident than the data
     # allow: its interval is several times narrower.
-    white = thermal_problem(record, 1, 35.0, noise_terms=("white",),
-                            allan=bc.allan_deviation(values, RATE))
+    white = thermal_problem(
+        record, 1, 35.0, noise_terms=("white",), allan=bc.allan_deviation(values, RATE)
+    )
     naive = sample_thermal(white, 1, 35.0, seed=0)
-    assert np.sqrt(fit.coefficient_covariance[1, 1]) > 3 * np.sqrt(naive.coefficient_covariance[1, 1])
+    assert np.sqrt(fit.coefficient_covariance[1, 1]) > 3 * np.sqrt(
+        naive.coefficient_covariance[1, 1]
+    )
 
 
 def test_update_with_white_noise_matches_the_closed_form():
@@ -52,7 +60,9 @@ def test_update_with_white_noise_matches_the_closed_form():
     for centre, offset in ((30.0, 0.002), (33.0, -0.001), (38.0, 0.003)):
         n = 1200
         t_period = centre + 0.8 * np.sin(np.arange(n) / 200)
-        values.append(TRUTH[0] + TRUTH[1] * (t_period - 35) + offset + noise_sd * rng.standard_normal(n))
+        values.append(
+            TRUTH[0] + TRUTH[1] * (t_period - 35) + offset + noise_sd * rng.standard_normal(n)
+        )
         temperature.append(t_period)
         periods.append((start, start + n))
         start += n
@@ -60,10 +70,19 @@ def test_update_with_white_noise_matches_the_closed_form():
     prior_mean, prior_cov = np.array([0.49, 0.011]), np.diag([0.01**2, 0.001**2])
     measured = [(0.002, 0.001), (-0.001, 0.001), (0.003, 0.001)]
     record = ThermalRecord(values, temperature, RATE, tuple(periods))
-    tight = NoisePrior(np.array([np.log(0.005)]), np.array([1e-4]), np.asarray(1.0), ("N",), "known")
-    problem = thermal_problem(record, 1, 35.0, noise_terms=(), allan=None,
-                              coefficient_prior=(prior_mean, prior_cov), offset_prior=measured,
-                              noise_prior=tight)
+    tight = NoisePrior(
+        np.array([np.log(0.005)]), np.array([1e-4]), np.asarray(1.0), ("N",), "known"
+    )
+    problem = thermal_problem(
+        record,
+        1,
+        35.0,
+        noise_terms=(),
+        allan=None,
+        coefficient_prior=(prior_mean, prior_cov),
+        offset_prior=measured,
+        noise_prior=tight,
+    )
     fit = sample_thermal(problem, 1, 35.0, seed=1)
 
     design = np.zeros((values.size, 5))
@@ -85,8 +104,9 @@ def test_update_with_white_noise_matches_the_closed_form():
 
 
 def write(path, columns, header):
-    np.savetxt(path, np.column_stack(columns), delimiter=",", header=header, comments="",
-               fmt="%.7f")
+    np.savetxt(
+        path, np.column_stack(columns), delimiter=",", header=header, comments="", fmt="%.7f"
+    )
     return path
 
 
@@ -94,16 +114,29 @@ def write(path, columns, header):
 def calibration(tmp_path_factory):
     folder = tmp_path_factory.mktemp("thermal")
     values, temperature = warm_up(4, n=2**13, walk=1e-4)
-    recording = write(folder / "warmup.csv", [np.arange(values.size) / RATE, values, temperature],
-                      "time,gyro_z[deg/s],temperature")
+    recording = write(
+        folder / "warmup.csv",
+        [np.arange(values.size) / RATE, values, temperature],
+        "time,gyro_z[deg/s],temperature",
+    )
     return folder, recording
 
 
 def test_fit_writes_a_versioned_calibration_and_compensate_uses_it(run_cli, calibration):
     folder, recording = calibration
     path = folder / "cal.json"
-    code, stdout, stderr = run_cli("thermal", "fit", recording, "--channel", "gyro_z",
-                                   "--degree", "1", "--json", path, "--quiet")
+    code, _stdout, stderr = run_cli(
+        "thermal",
+        "fit",
+        recording,
+        "--channel",
+        "gyro_z",
+        "--degree",
+        "1",
+        "--json",
+        path,
+        "--quiet",
+    )
     assert code == 0, stderr
     document = json.loads(path.read_text())
     assert document["schema"] == "bayescal.thermal_calibration" and document["schema_version"] == 1
@@ -114,8 +147,17 @@ def test_fit_writes_a_versioned_calibration_and_compensate_uses_it(run_cli, cali
     assert document["provenance"][0]["step"] == "fit" and "classical" in document
 
     out = folder / "compensated.csv"
-    code, _, stderr = run_cli("thermal", "compensate", recording, "--channel", "gyro_z",
-                              "--calibration", path, "--out", out)
+    code, _, stderr = run_cli(
+        "thermal",
+        "compensate",
+        recording,
+        "--channel",
+        "gyro_z",
+        "--calibration",
+        path,
+        "--out",
+        out,
+    )
     assert code == 0, stderr
     header = out.read_text().splitlines()[0].split(",")
     assert header[-2:] == ["gyro_z_compensated", "gyro_z_compensated_sd"]
@@ -127,34 +169,81 @@ def test_fit_writes_a_versioned_calibration_and_compensate_uses_it(run_cli, cali
 
 def test_bad_input(run_cli, calibration, tmp_path):
     folder, recording = calibration
-    values, temperature = warm_up(5, n=2000)
+    values, _temperature = warm_up(5, n=2000)
     time = np.arange(values.size) / RATE
     no_temperature = write(tmp_path / "a.csv", [time, values], "time,gyro_z[deg/s]")
-    constant = write(tmp_path / "b.csv", [time, values, np.full(values.size, 25.0)],
-                     "time,gyro_z[deg/s],temperature")
-    code, _, stderr = run_cli("thermal", "fit", no_temperature, "--channel", "gyro_z", "--json",
-                              tmp_path / "o.json")
+    constant = write(
+        tmp_path / "b.csv",
+        [time, values, np.full(values.size, 25.0)],
+        "time,gyro_z[deg/s],temperature",
+    )
+    code, _, stderr = run_cli(
+        "thermal", "fit", no_temperature, "--channel", "gyro_z", "--json", tmp_path / "o.json"
+    )
     assert code == 2 and "no temperature column" in stderr and "--temperature" in stderr
-    code, _, stderr = run_cli("thermal", "fit", constant, "--channel", "gyro_z", "--json",
-                              tmp_path / "o.json")
+    code, _, stderr = run_cli(
+        "thermal", "fit", constant, "--channel", "gyro_z", "--json", tmp_path / "o.json"
+    )
     assert code == 2 and "temperature is constant at 25" in stderr
     assert not (tmp_path / "o.json").exists()
 
     cal = folder / "cal.json"
-    run_cli("thermal", "fit", recording, "--channel", "gyro_z", "--degree", "1", "--json", cal,
-            "--quiet")
+    run_cli(
+        "thermal",
+        "fit",
+        recording,
+        "--channel",
+        "gyro_z",
+        "--degree",
+        "1",
+        "--json",
+        cal,
+        "--quiet",
+    )
     document = json.loads(cal.read_text())
     old = tmp_path / "old.json"
     old.write_text(json.dumps({**document, "schema_version": 0}))
-    code, _, stderr = run_cli("thermal", "compensate", recording, "--channel", "gyro_z",
-                              "--calibration", old, "--out", tmp_path / "c.csv")
+    code, _, stderr = run_cli(
+        "thermal",
+        "compensate",
+        recording,
+        "--channel",
+        "gyro_z",
+        "--calibration",
+        old,
+        "--out",
+        tmp_path / "c.csv",
+    )
     assert code == 2 and "schema version 0" in stderr
-    code, _, stderr = run_cli("thermal", "compensate", recording, "--channel", "gyro_z", "--unit",
-                              "rad/s", "--calibration", cal, "--out", tmp_path / "c.csv")
+    code, _, stderr = run_cli(
+        "thermal",
+        "compensate",
+        recording,
+        "--channel",
+        "gyro_z",
+        "--unit",
+        "rad/s",
+        "--calibration",
+        cal,
+        "--out",
+        tmp_path / "c.csv",
+    )
     assert code == 2 and "calibration is in deg/s but the channel is in rad/s" in stderr
 
-    hot = write(tmp_path / "hot.csv", [time, values, np.linspace(50, 60, values.size)],
-                "time,gyro_z[deg/s],temperature")
-    code, _, stderr = run_cli("thermal", "compensate", hot, "--channel", "gyro_z", "--calibration",
-                              cal, "--out", tmp_path / "c.csv")
+    hot = write(
+        tmp_path / "hot.csv",
+        [time, values, np.linspace(50, 60, values.size)],
+        "time,gyro_z[deg/s],temperature",
+    )
+    code, _, stderr = run_cli(
+        "thermal",
+        "compensate",
+        hot,
+        "--channel",
+        "gyro_z",
+        "--calibration",
+        cal,
+        "--out",
+        tmp_path / "c.csv",
+    )
     assert code == 0 and "outside the calibrated range" in stderr and "by up to" in stderr

@@ -63,10 +63,13 @@ def test_classical_numbers_match_an_independent_computation():
     u_span = math.sqrt(half_width(up) ** 2 + half_width(down) ** 2)
     g_half = 1.959963984540054 * 0.0001
     scale = 2 * 9.80123 / span
-    expected = {"mean_up": (up.mean(), half_width(up)), "mean_down": (down.mean(), half_width(down)),
-                "span": (span, u_span),
-                "scale": (scale, scale * math.sqrt((u_span / span) ** 2 + (g_half / 9.80123) ** 2)),
-                "offset": ((up.mean() + down.mean()) / 2, u_span / 2)}
+    expected = {
+        "mean_up": (up.mean(), half_width(up)),
+        "mean_down": (down.mean(), half_width(down)),
+        "span": (span, u_span),
+        "scale": (scale, scale * math.sqrt((u_span / span) ** 2 + (g_half / 9.80123) ** 2)),
+        "offset": ((up.mean() + down.mean()) / 2, u_span / 2),
+    }
     for name, (value, uncertainty) in expected.items():
         assert result[name][0] == pytest.approx(value, rel=1e-12), name
         assert result[name][1] == pytest.approx(uncertainty, rel=1e-9), name
@@ -75,8 +78,15 @@ def test_classical_numbers_match_an_independent_computation():
 def test_bayesian_recovers_scale_and_offset_with_a_random_walk():
     up, down = simulate_sections(2, N=0.0004, K=2e-4)
     gravity = local_gravity(given=f"{G}±0.00001")
-    result = bayesian_two_position(Section(up, 0.0, "up"), Section(down, 70.0, "down"), RATE,
-                                   gravity, terms=("white", "rate_random_walk"), gap_s=70.0, seed=0)
+    result = bayesian_two_position(
+        Section(up, 0.0, "up"),
+        Section(down, 70.0, "down"),
+        RATE,
+        gravity,
+        terms=("white", "rate_random_walk"),
+        gap_s=70.0,
+        seed=0,
+    )
     assert result.noise.diagnostics.passed, result.noise.diagnostics.failures
     for name, truth in (("scale", SCALE), ("offset", OFFSET)):
         draws = np.ravel(result.draws[name])
@@ -92,21 +102,42 @@ def session(tmp_path):
     rng = np.random.default_rng(8)
     up, down = simulate_sections(3, N=0.0004)
     turn = np.linspace(0, np.pi, 400)
-    z = np.concatenate([up, OFFSET + G / SCALE * np.cos(turn) + 0.05 * rng.standard_normal(400), down])
-    x = np.concatenate([0.01 * rng.standard_normal(6000), G * np.sin(turn), 0.01 * rng.standard_normal(6000)])
+    z = np.concatenate(
+        [up, OFFSET + G / SCALE * np.cos(turn) + 0.05 * rng.standard_normal(400), down]
+    )
+    x = np.concatenate(
+        [0.01 * rng.standard_normal(6000), G * np.sin(turn), 0.01 * rng.standard_normal(6000)]
+    )
     y = 0.01 * rng.standard_normal(z.size)
     path = tmp_path / "session.csv"
     rows = np.column_stack([np.arange(z.size) / RATE, x, y, z])
-    np.savetxt(path, rows, delimiter=",", fmt="%.7f", comments="",
-               header="time,acc_x[m/s^2],acc_y[m/s^2],acc_z[m/s^2]")
+    np.savetxt(
+        path,
+        rows,
+        delimiter=",",
+        fmt="%.7f",
+        comments="",
+        header="time,acc_x[m/s^2],acc_y[m/s^2],acc_z[m/s^2]",
+    )
     return path, rows
 
 
 def test_one_file_sections_are_found_and_reported(run_cli, tmp_path, session):
     path, _ = session
     output = tmp_path / "out.json"
-    code, stdout, stderr = run_cli("two-position", path, "--channel", "acc_z", "--latitude", "40.1",
-                                   "--height", "220", "--json", output, "--classical-only")
+    code, _stdout, stderr = run_cli(
+        "two-position",
+        path,
+        "--channel",
+        "acc_z",
+        "--latitude",
+        "40.1",
+        "--height",
+        "220",
+        "--json",
+        output,
+        "--classical-only",
+    )
     assert code == 0, stderr
     result = json.loads(output.read_text())
     sections = result["sections"]
@@ -124,8 +155,18 @@ def test_one_file_sections_are_found_and_reported(run_cli, tmp_path, session):
 def test_bayesian_json_contract(run_cli, tmp_path, session):
     path, _ = session
     output = tmp_path / "out.json"
-    code, _, stderr = run_cli("two-position", path, "--channel", "acc_z", "--g-local", f"{G}",
-                              "--terms", "white", "--json", output)
+    code, _, stderr = run_cli(
+        "two-position",
+        path,
+        "--channel",
+        "acc_z",
+        "--g-local",
+        f"{G}",
+        "--terms",
+        "white",
+        "--json",
+        output,
+    )
     assert code == 0, stderr
     parameters = json.loads(output.read_text())["bayesian"]["parameters"]
     assert set(parameters) == {"scale", "offset", "g_local"}
@@ -135,23 +176,53 @@ def test_bayesian_json_contract(run_cli, tmp_path, session):
 
 
 def write_section(path, values):
-    np.savetxt(path, np.column_stack([np.arange(values.size) / RATE, values]), delimiter=",",
-               fmt="%.7f", comments="", header="time,acc_z[m/s^2]")
+    np.savetxt(
+        path,
+        np.column_stack([np.arange(values.size) / RATE, values]),
+        delimiter=",",
+        fmt="%.7f",
+        comments="",
+        header="time,acc_z[m/s^2]",
+    )
     return path
 
 
 def test_bad_input(run_cli, tmp_path):
     up, down = simulate_sections(4, N=0.0004)
-    up_file, down_file = write_section(tmp_path / "up.csv", up), write_section(tmp_path / "down.csv", down)
+    up_file, down_file = (
+        write_section(tmp_path / "up.csv", up),
+        write_section(tmp_path / "down.csv", down),
+    )
     cases = [
         (["--up", up_file], "one section is missing"),
         (["--up", up_file, "--down", up_file], "not opposite"),
-        (["--up", write_section(tmp_path / "tilt.csv", up + np.linspace(0, 0.3, up.size)),
-          "--down", down_file], "not static"),
-        (["--up", write_section(tmp_path / "g.csv", up / 9.80665), "--down",
-          write_section(tmp_path / "g2.csv", down / 9.80665)], "unit is probably wrong"),
+        (
+            [
+                "--up",
+                write_section(tmp_path / "tilt.csv", up + np.linspace(0, 0.3, up.size)),
+                "--down",
+                down_file,
+            ],
+            "not static",
+        ),
+        (
+            [
+                "--up",
+                write_section(tmp_path / "g.csv", up / 9.80665),
+                "--down",
+                write_section(tmp_path / "g2.csv", down / 9.80665),
+            ],
+            "unit is probably wrong",
+        ),
     ]
     for arguments, fragment in cases:
-        code, stdout, stderr = run_cli("two-position", *arguments, "--channel", "acc_z",
-                                       "--g-local", "9.80123", "--classical-only")
+        code, stdout, stderr = run_cli(
+            "two-position",
+            *arguments,
+            "--channel",
+            "acc_z",
+            "--g-local",
+            "9.80123",
+            "--classical-only",
+        )
         assert code == 2 and fragment in stderr and stdout == "", (fragment, stderr)

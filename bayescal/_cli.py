@@ -66,8 +66,18 @@ def _columns(text: str) -> tuple[str, str, str]:
 
 def _add_recording_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("recording")
-    group.add_argument("file", nargs="?", help="recording: .csv, .parquet or .npz")
+    group.add_argument(
+        "file",
+        nargs="?",
+        help="recording: .csv, .parquet or .npz, or a ROS bag (.bag, .db3, .mcap or a ROS 2 "
+        "bag folder)",
+    )
     group.add_argument("--channel", help="column to analyse, e.g. gyro_x")
+    group.add_argument(
+        "--topic",
+        help="sensor_msgs/Imu topic of a ROS bag (default: its only one); its columns are "
+        "time, bag_time, gyro_x/y/z [rad/s], acc_x/y/z [m/s^2]",
+    )
     group.add_argument(
         "--unit",
         help="unit of the channel (deg/s, rad/s, m/s^2, g ...); "
@@ -153,6 +163,15 @@ def build_parser() -> argparse.ArgumentParser:
         "log-spaced taus, or seconds such as 0.1,1,10",
     )
     noise.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    noise.add_argument(
+        "--export",
+        nargs=2,
+        action="append",
+        metavar=("FORMAT", "PATH"),
+        help="also write the channel's noise for another tool: kalibr (imu.yaml) or matlab "
+        "(gyroparams/accelparams script); a file already at PATH keeps the other sensor's "
+        "entries (repeatable)",
+    )
     bayes = noise.add_argument_group("Bayesian model")
     bayes.add_argument(
         "--terms",
@@ -212,9 +231,16 @@ def build_parser() -> argparse.ArgumentParser:
     two.add_argument("--quiet", action="store_true")
     two.add_argument("--json", metavar="PATH")
     two.set_defaults(run=_run_two_position)
-    from . import _thermal_command
+    from . import _multi_position_command, _thermal_command
 
     _thermal_command.add_parser(commands)
+    from . import _report_command
+
+    _report_command.add_parser(commands)
+    _multi_position_command.add_parser(commands)
+    from . import _discover_command
+
+    _discover_command.add_parser(commands)
     sensors = commands.add_parser("sensors", help="list the sensor cards (datasheet priors)")
     sensors.set_defaults(run=_run_sensors)
     return parser
@@ -236,7 +262,7 @@ def _load(args):
             source=args.file,
             fix="name the column to analyse, e.g. --channel gyro_x",
         )
-    return load_table(args.file), args.channel
+    return load_table(args.file, topic=getattr(args, "topic", None)), args.channel
 
 
 def _window(args, table) -> tuple[float | None, float | None, dict]:
@@ -270,6 +296,7 @@ def _window(args, table) -> tuple[float | None, float | None, dict]:
 
 def _run_noise(args) -> int:
     from ._classical import classical_noise
+    from ._export import plan_exports, write_exports
     from ._noise_command import noise_result, noise_text
     from ._noise_fit import parse_terms
     from ._output import check_writable, write_json
@@ -292,6 +319,9 @@ def _run_noise(args) -> int:
         stop=stop,
         gaps=args.gaps,
     )
+    exports = plan_exports(
+        args.export, data.unit, channel, data.source, getattr(table, "topic", None)
+    )
     window = {"start_s": data.start_s, "stop_s": data.stop_s, **window}
     try:
         classical = classical_noise(
@@ -304,9 +334,12 @@ def _run_noise(args) -> int:
     result["notes"] = window.pop("notes", []) + result["notes"]
     if args.json:
         write_json(args.json, result)
+    exported = write_exports(exports, result)
     if out_folder is not None:
         _write_folder(out_folder, result, fit, data)
     print(noise_text(result))
+    for line in exported:
+        print(line)
     if fit is not None and not fit.diagnostics.passed:
         print(
             f"bayescal noise: HEALTH CHECK FAILED for {data.channel}: "

@@ -95,7 +95,8 @@ FACE_TOLERANCE_DEG = 15.0
 UNIT_TOLERANCE = 0.3
 
 ANGLE_PRIOR_SD = 0.1  # rad
-ROTATION_PRIOR_SD = 0.3  # rad: a six-face pose is assigned to its face up to 45 deg off
+# rad: weak across the mounting rotations the face tolerance admits (17 deg is one sd).
+ROTATION_PRIOR_SD = 0.3
 SCALE_PRIOR_LOG_SD = 1.0
 SCATTER_PRIOR_LOG_SD = 3.0
 
@@ -152,11 +153,13 @@ def find_poses(
     sections=None,
     start_s: float = 0.0,
     min_duration_s: float = MIN_DURATION_S,
+    unit: str = "",
 ) -> Poses:
     """Poses of a (samples, 3) recording: its still sections
     (:func:`bayescal._sections.find_static_sections` on all three channels), or the given
     ``sections``, (start, stop) pairs in seconds from the first sample, each checked to be
-    still. ``start_s`` is the time of the first sample in the file."""
+    still. ``start_s`` is the time of the first sample in the file; ``unit``, the readings'
+    unit, goes into the messages."""
     values = np.asarray(values, dtype=float)
     if sections is None:
         still = find_static_sections(values, rate_hz, min_duration_s=min_duration_s)
@@ -182,11 +185,11 @@ def find_poses(
             )
         blocks.append(block)
     poses = Poses.from_samples(blocks, [s for s, _ in sections], [s for _, s in sections])
-    _check_still(blocks, poses)
+    _check_still(blocks, poses, unit)
     return poses
 
 
-def _check_still(blocks, poses: Poses) -> None:
+def _check_still(blocks, poses: Poses, unit: str) -> None:
     """A given section is not still when its mean moves between its halves by more than
     MOVING_LIMIT standard errors on some axis and by more than 1 % of the poses' radius."""
     radius = _rough_radius(poses.mean)
@@ -197,10 +200,13 @@ def _check_still(blocks, poses: Poses) -> None:
         change = np.abs(halves[1].mean(axis=0) - halves[0].mean(axis=0))
         moved = (change > MOVING_LIMIT * error) & (change > 0.01 * radius)
         if moved.any():
-            axis = int(np.argmax(np.where(moved, change / error, 0)))
+            # A coarsely quantized still half can have no scatter at all.
+            with np.errstate(divide="ignore", invalid="ignore"):
+                axis = int(np.argmax(np.where(moved, change / error, 0)))
+            amount = f"{change[axis]:.4g} {unit}".strip()
             raise InputError(
                 f"the section {poses.start_s[index]:g}-{poses.stop_s[index]:g} s is not still: "
-                f"its {AXES[axis]} reading moves by {change[axis]:.4g} between its halves "
+                f"its {AXES[axis]} reading moves by {amount} between its halves "
                 f"({change[axis] / error[axis]:.0f} standard errors)",
                 fix="choose still stretches (--sections) or hold the sensor still",
             )
@@ -218,8 +224,15 @@ def _rough_radius(mean: np.ndarray) -> float:
 
 def check_unit(poses: Poses, unit: str) -> None:
     """In a declared acceleration unit the pose magnitudes must be near g (offsets are a small
-    part of g in calibrated-ish units); a unit that fits them better is suggested."""
+    part of g in calibrated-ish units); a unit that fits them better is suggested. A unit of
+    another quantity (deg/s ...) is refused; a count unit (LSB ...) is taken as it is."""
     parsed = parse_unit(unit)
+    if parsed.known and parsed.quantity != "acceleration":
+        raise InputError(
+            f"the unit {unit} is a unit of {parsed.quantity.replace('_', ' ')}, not of "
+            "acceleration: the three channels must be one accelerometer's",
+            fix="pass --unit m/s^2, g, mg or the sensor's count unit (LSB), and check --channels",
+        )
     if parsed.quantity != "acceleration":
         return
     magnitude = float(np.median(np.linalg.norm(poses.mean, axis=1)))
@@ -350,7 +363,7 @@ def _least_squares(start, step, mean, faces, g, six_face):
     def residuals(z, _):
         return _residuals(start + step * z, mean, faces, g, six_face)
 
-    solver = optx.LevenbergMarquardt(rtol=1e-10, atol=1e-12)
+    solver = optx.LevenbergMarquardt(rtol=1e-10, atol=1e-10)
     solution = optx.least_squares(
         residuals, solver, jnp.zeros_like(start), max_steps=500, throw=False
     )
@@ -511,11 +524,17 @@ def classical_multi_position(
     row_scale = np.tile(best[:3], poses.n) / g if six_face else np.full(poses.n, 1 / g)
     singular = np.linalg.svd(jacobian * row_scale[:, None] * step[None, :], compute_uv=False)
     conditioning = float(singular[-1] / singular[0])
-    if conditioning < MIN_CONDITIONING or not converged:
+    if conditioning < MIN_CONDITIONING:
         raise InputError(
             f"the {poses.n} poses do not determine the calibration (conditioning "
             f"{conditioning:.2g} < {MIN_CONDITIONING:g}): they cover too little of the sphere",
             fix="record more poses in different orientations (12 or more, spread over the sphere)",
+        )
+    if not converged:
+        raise InputError(
+            f"the least-squares fit to the {poses.n} poses did not converge",
+            fix="check that every pose is still and that the three channels are one "
+            "accelerometer's x, y and z",
         )
     rss = float(residuals @ residuals)
     covariance = rss / dof * np.linalg.inv(jacobian.T @ jacobian)
@@ -559,6 +578,33 @@ def calibration_matrices(values, six_face: bool) -> dict:
         result["rotation_R"] = rotation_m
         result["sensitivity_fixture"] = np.linalg.inv(rotation_m @ matrix)
     return result
+
+
+def simulate_poses(
+    rng: np.random.Generator,
+    values,
+    directions,
+    g: float,
+    *,
+    six_face: bool = False,
+    samples: int = 200,
+    noise_sd=1.0,
+) -> Poses:
+    """Poses of a sensor with calibration ``values`` (in the order of FREE_PARAMETERS, or
+    SIX_FACE_PARAMETERS) held so that gravity points along the unit ``directions`` (N, 3) —
+    of the body frame for free poses, of the fixture frame for six faces — each pose the mean
+    of ``samples`` readings with white noise of sd ``noise_sd`` (raw unit, per axis)."""
+    values = np.asarray(values, dtype=float)
+    scales, angles, rotation, offsets = _split(values, six_face)
+    matrix = np.asarray(_calibration_matrix(jnp.asarray(scales), jnp.asarray(angles)))
+    body = np.asarray(directions, dtype=float)
+    if six_face:
+        body = body @ Rotation.from_rotvec(rotation).as_matrix()  # R^T f, row by row
+    readings = np.linalg.solve(matrix, g * body.T).T + offsets
+    noise_sd = np.broadcast_to(np.asarray(noise_sd, dtype=float), (3,))
+    return Poses.from_samples(
+        [level + noise_sd * rng.standard_normal((samples, 3)) for level in readings]
+    )
 
 
 # --- Bayesian -------------------------------------------------------------------------------
@@ -649,16 +695,16 @@ def multi_position_problem(poses: Poses, classical: ClassicalCalibration) -> Mul
     sd = np.sqrt(np.diag(classical.covariance))
     # The classical residual RMS in g: magnitudes (free) or raw components (six-face).
     scatter = classical.residual_rms * (float(np.mean(relative)) if six_face else 1 / g)
-    angles = n_calibration - 6
+    n_angles = n_calibration - 6  # misalignment, and the mounting rotation of six faces
     location = np.concatenate([np.log(relative), values[3:], [math.log(scatter)]])
     prior_mean = np.concatenate(
-        [np.log(relative), np.zeros(angles), values[-3:], [math.log(scatter)]]
+        [np.log(relative), np.zeros(n_angles), values[-3:], [math.log(scatter)]]
     )
     prior_sd = np.concatenate(
         [
             np.full(3, SCALE_PRIOR_LOG_SD),
             np.full(3, ANGLE_PRIOR_SD),
-            np.full(angles - 3, ROTATION_PRIOR_SD),
+            np.full(n_angles - 3, ROTATION_PRIOR_SD),
             1 / relative,
             [SCATTER_PRIOR_LOG_SD],
         ]
@@ -697,10 +743,13 @@ def _maximum_a_posteriori(problem: MultiPositionProblem):
     return solution.value, hessian, solution.result == optx.RESULTS.successful
 
 
-@eqx.filter_jit
-def _batch_log_posterior(problem: MultiPositionProblem, theta):
-    """Log-posterior of a batch of walkers; the problem is an argument, so that one
-    compilation serves every session with the same number of poses."""
+@partial(jax.jit, static_argnames="treedef")
+def _batch_log_posterior(leaves, treedef, theta):
+    """Log-posterior of a batch of walkers. The problem comes as its array leaves and tree
+    structure: one compilation serves every session with the same number of poses, and a
+    plain list of arrays costs a few times less to pass on each of the sampler's thousands of
+    calls than the module through ``eqx.filter_jit``."""
+    problem = jax.tree_util.tree_unflatten(treedef, leaves)
     return jax.vmap(problem.log_posterior)(theta)
 
 
@@ -735,8 +784,9 @@ def bayesian_multi_position(
     rng = np.random.default_rng(seed)
     best, hessian, map_converged = _maximum_a_posteriori(problem)
     covariance = np.linalg.pinv(np.asarray(hessian))
+    leaves, treedef = jax.tree_util.tree_flatten(problem)
     sampler, converged = sample_ensemble(
-        lambda theta: _batch_log_posterior(problem, theta),
+        lambda theta: _batch_log_posterior(leaves, treedef, theta),
         np.asarray(best),
         covariance,
         rng,

@@ -109,10 +109,19 @@ def _read_arrow(path: Path, source: str):
         ) from None
 
 
-def load_table(path: str | Path) -> Table:
-    """Read a CSV, Parquet or NPZ recording into a :class:`Table`."""
+def load_table(path: str | Path, topic: str | None = None) -> Table:
+    """Read a CSV, Parquet or NPZ recording, or the ``sensor_msgs/Imu`` topic ``topic`` of a
+    ROS bag (:mod:`bayescal._rosbag`), into a :class:`Table`."""
+    from ._rosbag import is_rosbag, read_rosbag
+
     path = Path(path)
     source = str(path)
+    if is_rosbag(path):
+        return read_rosbag(path, topic)
+    if topic is not None:
+        raise InputError(
+            f"--topic {topic}: only a ROS bag has topics", source=source, fix="leave --topic out"
+        )
     if not path.is_file():
         raise InputError("no such file", source=source, fix="check the path")
     suffix = path.suffix.lower()
@@ -142,7 +151,7 @@ def load_table(path: str | Path) -> Table:
         raise InputError(
             f"unknown file type '{path.suffix}'",
             source=source,
-            fix="use a .csv, .parquet or .npz recording",
+            fix="use a .csv, .parquet or .npz recording, or a ROS bag (.bag, .db3, .mcap)",
         )
     table = _read_arrow(path, source)
     if table.num_rows == 0:
@@ -414,7 +423,7 @@ def seconds_from_start(
         raise InputError(
             "no time column ('time' or 't') and no --rate",
             source=table.source,
-            fix="pass --rate HZ or --time-column NAME",
+            fix=f"pass --rate HZ or --time-column NAME (columns: {', '.join(table.columns)})",
         )
     time, time_note = _time_in_seconds(table, time_name, time_unit)
     _check_time_order(time, table.source, time_name)

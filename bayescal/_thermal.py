@@ -18,6 +18,19 @@ integrated out exactly for each value of the noise parameters: the noise paramet
 sampled (emcee), the coefficients drawn from their Gaussian conditional. With white noise
 only, fixed, the posterior is Gaussian in closed form.
 
+Drift since the calibration. An in-field update takes an earlier calibration as its prior.
+That calibration's covariance says how well the bias curve was known *then*; the sensor has
+aged since (the reason for updating at all), so taken as it is, the prior is over-confident
+and the update inherits its errors with bands that miss them. The update therefore adds a
+drift of the coefficients since the calibration, independent per term,
+delta_j ~ N(0, (s / h^j)^2), with h the largest distance of the calibrated temperature range
+from T0: the bias has moved by about s at T0 and each term by about s at the edge of the
+range. s (in the channel's unit) is either given (0: no aging) or learned with the noise
+(``drift="auto"``): log-normal prior with its median at the calibration's own standard
+deviation of c_0 and sd DRIFT_PRIOR_LOG_SD in the log; where the field data show the old
+calibration to be off, s grows and the coefficients the field data cannot see (the curvature
+when they cover a few degrees) keep bands as wide as that drift allows.
+
 Degree. With ``degree="auto"`` each degree 0..4 is scored by its expected log predictive
 density computed one block ahead (the prequential score p(z_k | z_1..k-1): leave-future-out,
 valid for correlated noise, where leave-one-out is not), at its MAP noise; the lowest degree
@@ -43,6 +56,7 @@ from ._whittle import spectral_summary, whittle_log_likelihood
 EARTH_RATE = 7.2921150e-5  # rad/s (15.041 deg/h), IERS
 MAX_BLOCKS = 96
 MAX_DEGREE = 4
+DRIFT_PRIOR_LOG_SD = 3.0
 _AXES = {
     "up": (0, 0, 1),
     "down": (0, 0, -1),
@@ -139,6 +153,50 @@ class ThermalProblem(eqx.Module):
     noise_prior: NoisePrior
     high_bins: np.ndarray
     """Weights that keep only the Whittle bins above the blocks' frequencies."""
+    drift_base: np.ndarray | None = None
+    """Learned drift only: the calibration's covariance of c, to which the drift is added."""
+    drift_shape: np.ndarray | None = None
+    """Learned drift only: sd of each coefficient's drift per unit s (1 / h^j)."""
+    drift_prior: np.ndarray | None = None
+    """Learned drift only: location and scale of the normal prior on log s."""
+
+    @property
+    def learns_drift(self) -> bool:
+        return self.drift_base is not None
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """Names of the sampled coordinates: the noise parameters, then the drift s."""
+        return self.noise_prior.parameters + (("drift",) if self.learns_drift else ())
+
+    @property
+    def location(self):
+        """Prior location of every sampled coordinate (a normal prior on each)."""
+        if not self.learns_drift:
+            return jnp.asarray(self.noise_prior.location)
+        return jnp.append(self.noise_prior.location, self.drift_prior[0])
+
+    @property
+    def scale(self):
+        if not self.learns_drift:
+            return jnp.asarray(self.noise_prior.scale)
+        return jnp.append(self.noise_prior.scale, self.drift_prior[1])
+
+    def drift(self, theta):
+        """The drift scale s of a draw (learned drift only)."""
+        return jnp.exp(theta[..., len(self.noise_prior.parameters)])
+
+    def prior(self, theta):
+        """Mean and precision of the regression's prior (zero precision: flat), and the log
+        determinant of its proper part where that depends on theta (else 0)."""
+        if not self.learns_drift:
+            return self.prior_mean, self.prior_precision, 0.0
+        size = self.drift_base.shape[0]
+        covariance = self.drift_base + jnp.diag((self.drift(theta) * self.drift_shape) ** 2)
+        factor = jnp.linalg.cholesky(covariance)
+        inverse = jax.scipy.linalg.cho_solve((factor, True), jnp.eye(size))
+        precision = jnp.asarray(self.prior_precision).at[:size, :size].set(inverse)
+        return self.prior_mean, precision, -2 * jnp.sum(jnp.log(jnp.diag(factor)))
 
     def natural(self, theta):
         transform = {"F": jnp.tanh}
@@ -151,19 +209,21 @@ class ThermalProblem(eqx.Module):
         return component_weights(**self.natural(theta))
 
     def conditional(self, theta):
-        """Precision and mean of the regression given the noise, and the pieces of the log
-        marginal likelihood."""
+        """Precision and mean of the regression given the noise (and drift), and the pieces
+        of the log marginal likelihood: log det of the block covariance less that of the prior
+        precision where it varies, and the quadratic form."""
+        prior_mean, prior_precision, prior_log_det = self.prior(theta)
         covariance = jnp.einsum("t,tij->ij", self.weights(theta), self.basis)
         factor = jnp.linalg.cholesky(covariance)
         whitened_design = jax.scipy.linalg.solve_triangular(factor, self.design, lower=True)
         whitened_data = jax.scipy.linalg.solve_triangular(factor, self.block_mean, lower=True)
-        precision = self.prior_precision + whitened_design.T @ whitened_design
-        linear = whitened_design.T @ whitened_data + self.prior_precision @ self.prior_mean
+        precision = prior_precision + whitened_design.T @ whitened_design
+        linear = whitened_design.T @ whitened_data + prior_precision @ prior_mean
         mean = jnp.linalg.solve(precision, linear)
-        log_det = 2 * jnp.sum(jnp.log(jnp.diag(factor)))
+        log_det = 2 * jnp.sum(jnp.log(jnp.diag(factor))) - prior_log_det
         quadratic = (
             whitened_data @ whitened_data
-            + self.prior_mean @ self.prior_precision @ self.prior_mean
+            + prior_mean @ prior_precision @ prior_mean
             - linear @ mean
         )
         return precision, mean, log_det, quadratic
@@ -174,7 +234,7 @@ class ThermalProblem(eqx.Module):
         levels = -0.5 * (log_det + log_det_precision + quadratic)
         pointwise = whittle_log_likelihood(self.spectral, self.weights(theta))
         fast = jnp.sum(pointwise[: self.high_bins.size] * self.high_bins)
-        prior = -0.5 * jnp.sum(((theta - self.noise_prior.location) / self.noise_prior.scale) ** 2)
+        prior = -0.5 * jnp.sum(((theta - self.location) / self.scale) ** 2)
         value = levels + fast + prior
         return jnp.where(jnp.isfinite(value), value, -jnp.inf)
 
@@ -190,11 +250,18 @@ def thermal_problem(
     offset_prior: list[tuple[float, float] | None] | None = None,
     noise_prior: NoisePrior | None = None,
     spectral=None,
+    drift: float | str | None = None,
+    calibrated_range: tuple[float, float] | None = None,
 ) -> ThermalProblem:
     """Set up the likelihood. ``coefficient_prior`` is (mean, covariance) of c (flat when
     None); ``offset_prior`` adds one offset per period, each N(m, u^2) when measured and flat
     otherwise (then only the coefficient prior fixes the level); ``spectral`` reuses a
-    :func:`record_spectrum`."""
+    :func:`record_spectrum`.
+
+    When ``coefficient_prior`` is an earlier calibration, ``drift`` is how far its bias may
+    have moved since (module docstring): a scale s in the channel's unit, ``"auto"`` to learn
+    s from the data, or None / 0 to take the prior as it stands (right only when nothing has
+    changed since). ``calibrated_range`` is that calibration's temperature range (h)."""
     start, stop, owner = _blocks(record)
     if start.size < degree + 3:
         raise InputError(
@@ -220,8 +287,25 @@ def thermal_problem(
         )
     mean = np.zeros(degree + 1)
     precision = np.zeros((degree + 1, degree + 1))
+    drift_fields = {}
     if coefficient_prior is not None:
-        mean, covariance = coefficient_prior
+        mean, covariance = (np.asarray(x, dtype=float) for x in coefficient_prior)
+        if drift is not None and drift != 0:
+            shape = _drift_shape(degree, reference, calibrated_range)
+            if drift == "auto":
+                drift_fields = {
+                    "drift_base": covariance,
+                    "drift_shape": shape,
+                    "drift_prior": np.array(
+                        [math.log(math.sqrt(covariance[0, 0])), DRIFT_PRIOR_LOG_SD]
+                    ),
+                }
+            elif isinstance(drift, (int, float)) and drift > 0:
+                covariance = covariance + np.diag((drift * shape) ** 2)
+            else:
+                raise InputError(
+                    f"drift {drift!r}", fix="give a positive scale in the channel's unit or auto"
+                )
         precision = np.linalg.inv(covariance)
     design = powers
     if offset_prior is not None:
@@ -249,7 +333,23 @@ def thermal_problem(
         prior_precision=precision,
         noise_prior=noise_prior or default_prior(noise_terms, allan),
         high_bins=high,
+        **drift_fields,
     )
+
+
+def _drift_shape(degree: int, reference: float, calibrated_range) -> np.ndarray:
+    """sd of the drift of c_j per unit s: 1 / h^j, h the calibrated range's farthest point
+    from T0."""
+    if calibrated_range is None:
+        raise ValueError("a drift needs the calibrated temperature range")
+    low, high = calibrated_range
+    half = max(abs(reference - low), abs(high - reference))
+    if not half > 0:
+        raise InputError(
+            f"the calibrated temperature range [{low:g}, {high:g}] has no width about "
+            f"T0 = {reference:g}"
+        )
+    return half ** -np.arange(degree + 1.0)
 
 
 def record_spectrum(record: ThermalRecord):
@@ -266,7 +366,7 @@ def _map(problem: ThermalProblem):
     solution = optx.minimise(
         objective,
         optx.BFGS(rtol=1e-9, atol=1e-9),
-        jnp.asarray(problem.noise_prior.location),
+        jnp.asarray(problem.location),
         max_steps=2000,
         throw=False,
     )
@@ -299,22 +399,19 @@ def prequential_score(problem: ThermalProblem, theta, skip: int) -> np.ndarray:
     (flat parts included: their improper constants cancel between k - 1 and k)."""
     weights = np.asarray(problem.weights(jnp.asarray(theta)))
     covariance = np.einsum("t,tij->ij", weights, problem.basis)
-    flat = int(np.sum(np.diag(problem.prior_precision) == 0))
+    prior_mean, prior_precision, _ = (np.asarray(x) for x in problem.prior(jnp.asarray(theta)))
+    flat = int(np.sum(np.diag(prior_precision) == 0))
 
     def log_marginal(k):
         sigma = covariance[:k, :k]
         factor = np.linalg.cholesky(sigma)
         design = np.linalg.solve(factor, problem.design[:k])
         data = np.linalg.solve(factor, problem.block_mean[:k])
-        precision = problem.prior_precision + design.T @ design
-        linear = design.T @ data + problem.prior_precision @ problem.prior_mean
+        precision = prior_precision + design.T @ design
+        linear = design.T @ data + prior_precision @ prior_mean
         mean = np.linalg.solve(precision, linear)
         _, log_det_precision = np.linalg.slogdet(precision)
-        quadratic = (
-            data @ data
-            + problem.prior_mean @ problem.prior_precision @ problem.prior_mean
-            - linear @ mean
-        )
+        quadratic = data @ data + prior_mean @ prior_precision @ prior_mean - linear @ mean
         return -0.5 * (
             (k - flat) * math.log(2 * math.pi)
             + 2 * np.sum(np.log(np.diag(factor)))
@@ -346,6 +443,8 @@ class ThermalFit:
     diagnostics: object
     degree_scores: dict
     """degree -> (elpd, se of the difference to the best) when the degree was chosen"""
+    drift: tuple[float, float, float] | None = None
+    """Learned drift scale s since the prior calibration: (mean, q05, q95), channel units."""
 
 
 def sample_thermal(
@@ -373,7 +472,7 @@ def sample_thermal(
         max_steps,
         progress,
     )
-    names = problem.noise_prior.parameters
+    names = problem.parameters
     diagnostics, kept = diagnose(sampler, names, done, bool(converged))
     flat_theta = kept.reshape(-1, kept.shape[-1])
     draws, means, covariances = (
@@ -393,6 +492,10 @@ def sample_thermal(
     natural = {
         name: np.asarray(value) for name, value in problem.natural(jnp.asarray(flat_theta)).items()
     }
+    drift = None
+    if problem.learns_drift:
+        scale = np.asarray(problem.drift(jnp.asarray(flat_theta)))
+        drift = tuple(float(x) for x in (scale.mean(), *np.quantile(scale, [0.05, 0.95])))
     return ThermalFit(
         degree=degree,
         reference=reference,
@@ -409,20 +512,47 @@ def sample_thermal(
         map_covariance=map_covariance[coefficients, coefficients],
         diagnostics=diagnostics,
         degree_scores=degree_scores or {},
+        drift=drift,
     )
+
+
+def _identified_from(design: np.ndarray) -> int:
+    """How many leading blocks it takes for the columns of ``design`` to be identified (full
+    column rank, singular values above 1e-6 of the largest, columns scaled to 1); one more
+    than the blocks if never. A quantized temperature that sits on a few values at first
+    leaves the higher powers unidentified for a while."""
+    scaled = design / np.maximum(np.max(np.abs(design), axis=0), np.finfo(float).tiny)
+    for k in range(design.shape[1], design.shape[0] + 1):
+        singular = np.linalg.svd(scaled[:k], compute_uv=False)
+        if singular[-1] > 1e-6 * singular[0]:
+            return k
+    return design.shape[0] + 1
 
 
 def choose_degree(
     record: ThermalRecord, reference: float, *, noise_terms, allan
 ) -> tuple[int, dict]:
-    """The lowest degree whose prequential ELPD is within max(4, 2 SE) of the best."""
-    skip = max(MAX_DEGREE + 2, math.ceil(0.1 * _blocks(record)[0].size))
-    scores = {}
+    """The lowest degree whose prequential ELPD is within max(4, 2 SE) of the best. Under the
+    flat prior a degree has a predictive only once the blocks so far identify its
+    coefficients: scoring starts where every candidate is identified, and a degree the first
+    half of the blocks cannot identify is no candidate (absent from the table)."""
+    blocks = _blocks(record)[0].size
     spectral = record_spectrum(record)
+    problems = {}
     for degree in range(MAX_DEGREE + 1):
         problem = thermal_problem(
             record, degree, reference, noise_terms=noise_terms, allan=allan, spectral=spectral
         )
+        if _identified_from(problem.design) > blocks // 2:
+            break
+        problems[degree] = problem
+    skip = max(
+        MAX_DEGREE + 2,
+        math.ceil(0.1 * blocks),
+        *(_identified_from(problem.design) for problem in problems.values()),
+    )
+    scores = {}
+    for degree, problem in problems.items():
         best, _, _ = _map(problem)
         scores[degree] = prequential_score(problem, np.asarray(best), skip)
     best = max(scores, key=lambda d: scores[d].sum())

@@ -7,6 +7,13 @@ the coefficients c_0..c_d of bias(T) = sum_j c_j (T - T0)^j with their units and
 covered, the noise model, the Earth rate taken off (if any), and the provenance of every
 step. ``fit`` writes it, ``update`` reads it and writes the same schema, ``compensate`` reads
 it. A file of another schema version, or for another unit, is refused.
+
+``update`` takes the calibration as the prior of the coefficients *plus a drift since then*
+(:mod:`bayescal._thermal`): ``--drift auto`` (default) learns its scale from the alignment
+data, ``--drift S`` fixes it (S in the channel's unit: about how far the bias may have moved
+at T0), ``--drift 0`` assumes nothing has changed. An updated file adds ``drift`` (the scale
+used or learned, with its 90 % interval) and ``offsets`` (the period offsets); both are
+optional keys of schema version 1.
 """
 
 import csv
@@ -97,6 +104,14 @@ def add_parser(commands) -> None:
         "--periods",
         metavar="T0:T1,...",
         help="alignment periods in seconds (default: the record's gap-free runs)",
+    )
+    update.add_argument(
+        "--drift",
+        default="auto",
+        metavar="S|auto",
+        help="how far the bias may have moved since the calibration, in the channel's unit "
+        "(about that much at T0, each polynomial term about that much at the edge of the "
+        "calibrated range); auto (default) learns it from the data, 0 assumes no change",
     )
     update.add_argument("--latitude", type=float, metavar="DEG")
     update.add_argument("--axis", default="up")
@@ -436,12 +451,29 @@ def _periods(data, given: str | None) -> tuple[tuple[int, int], ...]:
     )
 
 
+def _parse_drift(text: str) -> float | str | None:
+    if text.strip().lower() == "auto":
+        return "auto"
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0):
+        raise InputError(
+            f"--drift {text!r}",
+            fix="give auto, 0 (no change since the calibration) or a positive scale in the "
+            "channel's unit",
+        )
+    return value or None
+
+
 def run_update(args) -> int:
     from ._noise_fit import NoisePrior
     from ._output import check_writable, write_json
     from ._thermal import ThermalRecord, sample_thermal, thermal_problem
 
     check_writable(args.json, "--json")
+    drift = _parse_drift(args.drift)
     _, data, _ = _read(args)
     calibration = read_calibration(args.calibration, data.unit)
     earth = _earth_rate(args, data.unit)
@@ -468,7 +500,9 @@ def run_update(args) -> int:
         np.array(scale),
         np.asarray(1.0),
         parameters,
-        f"the noise of the calibration {args.calibration}",
+        # A fixed text: it is a static field of the problem, and a path in it would make every
+        # calibration file compile its own likelihood (the provenance names the file).
+        "the noise of the prior calibration",
     )
     problem = thermal_problem(
         record,
@@ -482,6 +516,8 @@ def run_update(args) -> int:
         ),
         offset_prior=measurements,
         noise_prior=noise_prior,
+        drift=drift,
+        calibrated_range=tuple(calibration["temperature_range"]),
     )
     fit = sample_thermal(
         problem,
@@ -510,14 +546,27 @@ def run_update(args) -> int:
                     "prior": str(args.calibration),
                     "periods": [list(p) for p in periods],
                     "offset_measurements": measurements,
+                    "drift": args.drift,
                 },
             ),
         ],
-        {"offsets": {"mean": fit.offset_mean, "sd": fit.offset_sd, "unit": data.unit}},
+        {
+            "offsets": {"mean": fit.offset_mean, "sd": fit.offset_sd, "unit": data.unit},
+            "drift": _drift_entry(drift, fit, data.unit),
+        },
     )
     write_json(args.json, document)
     print(_fit_text(document))
     return _health(fit, "thermal update")
+
+
+def _drift_entry(drift, fit, unit: str) -> dict:
+    """The drift since the prior calibration that the update allowed for."""
+    if drift == "auto":
+        mean, low, high = fit.drift
+        return {"scale": mean, "q05": low, "q95": high, "unit": unit, "learned": True}
+    value = drift or 0.0
+    return {"scale": value, "q05": value, "q95": value, "unit": unit, "learned": False}
 
 
 def run_compensate(args) -> int:
@@ -604,6 +653,16 @@ def _fit_text(document: dict) -> str:
             + ", ".join(
                 f"{d}: {s['elpd']:.1f} (se {s['se_difference']:.1f})"
                 for d, s in bayes["degree_scores"].items()
+            )
+        )
+    if "drift" in document:
+        drift = document["drift"]
+        lines.append(
+            f"  drift since the prior calibration: {drift['scale']:.3g} {drift['unit']}"
+            + (
+                f" (learned, 90%: {drift['q05']:.3g}-{drift['q95']:.3g})"
+                if drift["learned"]
+                else " (given)"
             )
         )
     if "offsets" in document:

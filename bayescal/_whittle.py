@@ -31,6 +31,13 @@ Three refinements make it hold on real records of any length:
   sum I u^2. A likelihood evaluation costs one logarithm per bin — a few hundred — not one
   per frequency.
 
+Deterministic terms (a thermal polynomial, a sinusoid, an exponential transient ...) enter as
+regressors x_j with coefficients beta: the periodogram of the increments of y - X beta is a
+quadratic form in beta, so each bin also keeps the cross moments of y with every regressor and
+of the regressors with each other, and the likelihood stays exact in beta. Extra stationary
+components with a shape fixed in advance (a Gauss-Markov term at a given correlation time)
+are given by the autocovariance of their increments.
+
 The mean increment, R / fs for a rate ramp R, enters as one more Gaussian term (its variance
 again exact for the taper). Records with gaps contribute one periodogram per segment. Each
 segment's increments are cut to the longest length with no prime factor above 5 (dropping at
@@ -38,7 +45,7 @@ most a few percent at its end), for which FFTs are fast; a length such as 2^23 -
 otherwise cost a minute.
 """
 
-import itertools
+import functools
 import math
 
 import equinox as eqx
@@ -77,17 +84,24 @@ class SpectralSummary(eqx.Module):
     mean_basis: np.ndarray
     """(components, segments): variance of the mean increment per unit weight."""
     rate_hz: float = eqx.field(static=True)
+    cross: np.ndarray | None = None
+    """(3, regressors, bins): sum of Re(conj(Y) X_j) u^m over each bin, m = 0, 1, 2."""
+    gram: np.ndarray | None = None
+    """(3, regressors, regressors, bins): sum of Re(conj(X_i) X_j) u^m over each bin."""
+    mean_regressor: np.ndarray | None = None
+    """(segments, regressors): taper-weighted mean increment of each regressor."""
 
     @property
     def n_bins(self) -> int:
         return int(self.count.size)
 
 
-def _segments(values: np.ndarray, minimum: int) -> list[np.ndarray]:
+def _segment_bounds(values: np.ndarray, minimum: int) -> list[tuple[int, int]]:
+    """[start, stop) of each run of more than ``minimum`` samples without NaN."""
     present = ~np.isnan(values)
     edges = np.flatnonzero(np.diff(np.concatenate(([0], present.astype(np.int8), [0]))))
     return [
-        values[start:stop]
+        (int(start), int(stop))
         for start, stop in zip(edges[::2], edges[1::2], strict=True)
         if stop - start > minimum
     ]
@@ -114,38 +128,91 @@ def _bin_edges(n_frequencies: int, width: float) -> np.ndarray:
     return np.array(edges)
 
 
-def _expected_periodogram(taper: np.ndarray, rate_hz: float, index: np.ndarray) -> np.ndarray:
+@functools.lru_cache(maxsize=4)
+def _taper(length: int, taper_fraction: float) -> tuple[np.ndarray, np.ndarray]:
+    """The Tukey taper and its autocorrelation at lags 0 .. length - 1 (cached: every model
+    of a record shares them)."""
+    taper = windows.tukey(length, taper_fraction)
+    size = 2 * length
+    autocorrelation = fft.irfft(np.abs(fft.rfft(taper, size)) ** 2, size)[:length]
+    return taper, autocorrelation
+
+
+def _all_lags_expected(autocovariance: np.ndarray, autocorrelation: np.ndarray, index):
+    length = autocorrelation.size
+    product = autocovariance * autocorrelation
+    symmetric = np.zeros(2 * length)
+    symmetric[:length] = product
+    symmetric[length + 1 :] = product[1:][::-1]
+    return fft.rfft(symmetric).real[2 * index]
+
+
+@functools.lru_cache(maxsize=4)
+def _expected_periodogram(
+    length: int, rate_hz: float, taper_fraction: float, index: tuple[int, ...]
+) -> np.ndarray:
     """(terms, len(index)): expected tapered periodogram of each term per unit parameter^2 at
     the Fourier frequencies index / M, and (index 0) at zero frequency.
 
     sum over lags tau of r(tau) c(tau) e^{-2 pi i nu tau} / sum h^2, with c the taper's
     autocorrelation: a few lags for the moving-average terms, all lags (one FFT) for flicker.
+    Cached: it depends on the record only through its length.
     """
-    length = taper.size
-    size = 2 * length
-    autocorrelation = fft.irfft(np.abs(fft.rfft(taper, size)) ** 2, size)[:length]
+    taper, autocorrelation = _taper(length, taper_fraction)
+    index = np.asarray(index)
     frequency = index / length
     short_lags = np.arange(3)
     short = increment_autocovariance_shapes(short_lags, rate_hz)
     expected = []
     for term in SPECTRAL_COMPONENTS:
         if term == "bias_instability":  # long memory: all lags
-            product = increment_autocovariance_shapes(np.arange(length), rate_hz)[term]
-            product = product * autocorrelation
-            symmetric = np.zeros(size)
-            symmetric[:length] = product
-            symmetric[length + 1 :] = product[1:][::-1]
-            expected.append(fft.rfft(symmetric).real[2 * index])
+            flicker = increment_autocovariance_shapes(np.arange(length), rate_hz)[term]
+            expected.append(_all_lags_expected(flicker, autocorrelation, index))
         else:
             weights = short[term] * autocorrelation[:3] * np.array([1.0, 2.0, 2.0])
             expected.append(np.cos(2 * np.pi * np.outer(frequency, short_lags)) @ weights)
     return np.array(expected) / np.sum(taper**2)
 
 
+def _extra_expected(length: int, taper_fraction: float, index, components) -> np.ndarray:
+    """As :func:`_expected_periodogram` for ``components`` (functions lags -> increment
+    autocovariance), all lags each."""
+    taper, autocorrelation = _taper(length, taper_fraction)
+    lags = np.arange(length)
+    return np.array(
+        [_all_lags_expected(c(lags), autocorrelation, np.asarray(index)) for c in components]
+    ).reshape(len(components), len(index)) / np.sum(taper**2)
+
+
+def _bin_sums(per_frequency: np.ndarray, u: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """(3, ..., bins): sums over each bin of ``per_frequency`` (frequencies on axis 0) times
+    u^0, u^1 and u^2."""
+    shape = (-1,) + (1,) * (per_frequency.ndim - 1)
+    return np.stack(
+        [
+            np.moveaxis(np.add.reduceat(per_frequency * (u**power).reshape(shape), starts), 0, -1)
+            for power in range(3)
+        ]
+    )
+
+
 def spectral_summary(
-    values, rate_hz: float, *, taper_fraction: float = TAPER_FRACTION, bin_width: float = BIN_WIDTH
+    values,
+    rate_hz: float,
+    *,
+    taper_fraction: float = TAPER_FRACTION,
+    bin_width: float = BIN_WIDTH,
+    regressors=None,
+    extra_components=(),
 ) -> SpectralSummary:
-    """Summarise a rate series (NaN marks missing samples) for the Whittle likelihood."""
+    """Summarise a rate series (NaN marks missing samples) for the Whittle likelihood.
+
+    ``regressors``: (samples, p) deterministic terms whose coefficients the likelihood takes
+    (:func:`whittle_log_likelihood`, ``beta``); ``extra_components``: functions of the lag
+    giving the increment autocovariance of stationary terms beyond
+    :data:`SPECTRAL_COMPONENTS`, appended to the basis in that order."""
+    regressors = None if regressors is None else np.asarray(regressors, dtype=float)
+    cross, gram, mean_regressor = [], [], []
     parts = {
         name: []
         for name in (
@@ -160,73 +227,148 @@ def spectral_summary(
         )
     }
     mean_increment, mean_basis = [], []
-    for segment in _segments(np.asarray(values, dtype=float), MIN_INCREMENTS):
-        increments = np.diff(segment)
+    values = np.asarray(values, dtype=float)
+    for start, stop in _segment_bounds(values, MIN_INCREMENTS):
+        increments = np.diff(values[start:stop])
         increments = increments[: _fast_length_at_most(increments.size)]
         length = increments.size
-        taper = windows.tukey(length, taper_fraction)
+        taper, _ = _taper(length, taper_fraction)
         mean = float(np.dot(taper, increments) / taper.sum())
         information = np.sum(taper**2) ** 2 / (length * np.sum(taper**4))
-        periodogram = np.abs(fft.rfft(taper * (increments - mean))) ** 2 / np.sum(taper**2)
+        transform = fft.rfft(taper * (increments - mean))
+        periodogram = np.abs(transform) ** 2 / np.sum(taper**2)
         n_frequencies = (length - 1) // 2
         edges = _bin_edges(n_frequencies, bin_width)
-        nodes = np.array(
-            [
-                (low, (low + high - 1) // 2, high - 1) if high - low >= 3 else (low,) * 3
-                for low, high in itertools.pairwise(edges)
-            ]
-        )
-        expected = _expected_periodogram(taper, rate_hz, np.concatenate(([0], nodes.ravel())))
-        mean_increment.append(mean)
-        mean_basis.append(expected[:, 0] * np.sum(taper**2) / taper.sum() ** 2)
-        at_nodes = expected[:, 1:].reshape(len(SPECTRAL_COMPONENTS), -1, 3)
-
+        lows, highs = edges[:-1], edges[1:]
+        counts = highs - lows
         log_frequency = np.log(np.arange(1, n_frequencies + 1) / length)
-        for bin_index, (low, high) in enumerate(itertools.pairwise(edges)):
-            members = slice(low - 1, high - 1)
-            centre = float(log_frequency[members].mean())
-            u = log_frequency[members] - centre
-            power = periodogram[low:high]
-            offsets = (
-                np.log(nodes[bin_index] / length) - centre
-                if high - low >= 3
-                else np.array([-1.0, 0.0, 1.0])
+        centres = np.add.reduceat(log_frequency, lows - 1) / counts
+        u = log_frequency - np.repeat(centres, counts)
+        norm = np.sum(taper**2)
+        if regressors is not None:
+            x_increments = np.diff(regressors[start:stop], axis=0)[:length]
+            x_mean = taper @ x_increments / taper.sum()
+            x_transform = fft.rfft(taper[:, None] * (x_increments - x_mean), axis=0)
+            y_part = transform[1 : n_frequencies + 1]
+            x_part = x_transform[1 : n_frequencies + 1]
+            real, imaginary = x_part.real, x_part.imag
+            cross.append(
+                _bin_sums(
+                    y_part.real[:, None] * real + y_part.imag[:, None] * imaginary, u, lows - 1
+                )
+                / norm
             )
-            vandermonde = np.stack([np.ones(3), offsets, offsets**2], axis=1)
-            parts["count"].append(high - low)
-            parts["frequency_hz"].append(math.exp(centre) * rate_hz)
-            parts["moment0"].append(power.sum())
-            parts["moment1"].append(np.dot(power, u))
-            parts["moment2"].append(np.dot(power, u * u))
-            parts["spread"].append(np.dot(u, u))
-            parts["basis"].append(np.linalg.solve(vandermonde, at_nodes[:, bin_index].T))
-            parts["weight"].append(information)
+            gram.append(
+                _bin_sums(
+                    real[:, :, None] * real[:, None, :]
+                    + imaginary[:, :, None] * imaginary[:, None, :],
+                    u,
+                    lows - 1,
+                )
+                / norm
+            )
+            mean_regressor.append(x_mean)
+        wide = counts >= 3
+        nodes = np.stack(
+            [lows, np.where(wide, (lows + highs - 1) // 2, lows), np.where(wide, highs - 1, lows)],
+            axis=1,
+        )
+        index = (0, *nodes.ravel().tolist())
+        expected = np.concatenate(
+            (
+                _expected_periodogram(length, float(rate_hz), taper_fraction, index),
+                _extra_expected(length, taper_fraction, index, extra_components),
+            )
+        )
+        mean_increment.append(mean)
+        mean_basis.append(expected[:, 0] * norm / taper.sum() ** 2)
+        at_nodes = expected[:, 1:].reshape(expected.shape[0], -1, 3)
+
+        offsets = np.where(
+            wide[:, None], np.log(nodes / length) - centres[:, None], np.array([-1.0, 0.0, 1.0])
+        )
+        vandermonde = np.stack([np.ones_like(offsets), offsets, offsets**2], axis=2)
+        power = periodogram[1 : n_frequencies + 1]
+        moments = _bin_sums(power, u, lows - 1)
+        parts["count"].append(counts)
+        parts["frequency_hz"].append(np.exp(centres) * rate_hz)
+        parts["moment0"].append(moments[0])
+        parts["moment1"].append(moments[1])
+        parts["moment2"].append(moments[2])
+        parts["spread"].append(_bin_sums(np.ones_like(u), u, lows - 1)[2])
+        # (bins, 3, terms): the quadratic through the three nodes of each bin.
+        parts["basis"].append(np.linalg.solve(vandermonde, np.moveaxis(at_nodes, 0, -1)))
+        parts["weight"].append(np.full(counts.size, information))
     if not parts["count"]:
         raise ValueError(f"no run of more than {MIN_INCREMENTS} samples without a gap")
-    arrays = {name: np.array(values_) for name, values_ in parts.items()}
+    arrays = {name: np.concatenate(values_) for name, values_ in parts.items()}
     arrays["basis"] = np.transpose(arrays["basis"], (2, 1, 0))  # (terms, 3, bins)
+    regression = {}
+    if regressors is not None:
+        regression = {
+            "cross": np.concatenate(cross, axis=-1),
+            "gram": np.concatenate(gram, axis=-1),
+            "mean_regressor": np.array(mean_regressor),
+        }
     return SpectralSummary(
         **arrays,
         mean_increment=np.array(mean_increment),
         mean_basis=np.array(mean_basis).T,
         rate_hz=float(rate_hz),
+        **regression,
     )
 
 
-def whittle_log_likelihood(summary: SpectralSummary, variances, ramp=0.0):
-    """Pointwise log-likelihood: one value per frequency bin, then one per segment for the
-    mean increment. ``variances`` are the weights of the spectral components
-    (:func:`bayescal._noise_model.component_weights`), ``ramp`` is R."""
-    variances = jnp.asarray(variances)
+def _bin_coefficients(summary: SpectralSummary, variances):
+    """log-sum of each bin and the weights g_m of its moments in sum I / S (three rows)."""
     # S(u) = s0 + s1 u + s2 u^2 in the bin, so log S = a + b u + (c/2) u^2 with a = log s0,
     # b = s1 / s0 and c/2 = s2 / s0 - b^2 / 2.
-    s0, s1, s2 = jnp.einsum("t,tkb->kb", variances, summary.basis)
+    s0, s1, s2 = jnp.einsum("t,tkb->kb", jnp.asarray(variances), summary.basis)
     b = s1 / s0
     curvature = s2 / s0
     log_sum = summary.count * jnp.log(s0) + (curvature - 0.5 * b * b) * summary.spread
-    ratio_sum = (summary.moment0 - b * summary.moment1 + (b * b - curvature) * summary.moment2) / s0
-    bins = -summary.weight * (log_sum + ratio_sum)
+    return log_sum, jnp.stack([1.0 / s0, -b / s0, (b * b - curvature) / s0])
+
+
+def whittle_log_likelihood(summary: SpectralSummary, variances, ramp=0.0, beta=None):
+    """Pointwise log-likelihood: one value per frequency bin, then one per segment for the
+    mean increment. ``variances`` are the weights of the spectral components
+    (:func:`bayescal._noise_model.component_weights`, then any extra components), ``ramp`` is
+    R, ``beta`` the coefficients of the summary's regressors (the data minus X beta)."""
+    variances = jnp.asarray(variances)
+    log_sum, coefficients = _bin_coefficients(summary, variances)
+    moments = jnp.stack([summary.moment0, summary.moment1, summary.moment2])
+    mean_increment = summary.mean_increment
+    if beta is not None:
+        moments = (
+            moments
+            - 2 * jnp.einsum("p,mpb->mb", beta, summary.cross)
+            + jnp.einsum("p,q,mpqb->mb", beta, beta, summary.gram)
+        )
+        mean_increment = mean_increment - summary.mean_regressor @ beta
+    bins = -summary.weight * (log_sum + jnp.sum(coefficients * moments, axis=0))
     variance = jnp.einsum("t,ts->s", variances, summary.mean_basis)
-    residual = summary.mean_increment - ramp / summary.rate_hz
+    residual = mean_increment - ramp / summary.rate_hz
     mean_terms = -0.5 * (jnp.log(2 * jnp.pi * variance) + residual**2 / variance)
     return jnp.concatenate((bins, mean_terms))
+
+
+def regression_coefficients(summary: SpectralSummary, variances, ramp=0.0, ridge=0.0):
+    """The beta that maximises :func:`whittle_log_likelihood` given the noise, and the
+    precision matrix of beta (the likelihood is quadratic in beta: its conditional posterior
+    under a flat prior is normal with this mean and precision). ``ridge`` (a vector) is added
+    to the precision's diagonal: a unit ridge with a zero column pins its coefficient at 0."""
+    variances = jnp.asarray(variances)
+    _, coefficients = _bin_coefficients(summary, variances)
+    weighted = summary.weight * coefficients
+    variance = jnp.einsum("t,ts->s", variances, summary.mean_basis)
+    target = summary.mean_increment - ramp / summary.rate_hz
+    precision = (
+        2 * jnp.einsum("mb,mpqb->pq", weighted, summary.gram)
+        + jnp.einsum("sp,sq,s->pq", summary.mean_regressor, summary.mean_regressor, 1.0 / variance)
+        + jnp.diag(jnp.broadcast_to(ridge, summary.gram.shape[1:2]))
+    )
+    right = 2 * jnp.einsum("mb,mpb->p", weighted, summary.cross) + jnp.einsum(
+        "sp,s->p", summary.mean_regressor, target / variance
+    )
+    return jnp.linalg.solve(precision, right), precision

@@ -10,7 +10,7 @@ import pytest
 import bayescal as bc
 from bayescal._noise_fit import NoisePrior
 from bayescal._noise_model import NoiseModel
-from bayescal._thermal import ThermalRecord, sample_thermal, thermal_problem
+from bayescal._thermal import ThermalRecord, _identified_from, sample_thermal, thermal_problem
 
 RATE = 10.0
 TRUTH = (0.5, 0.01)  # bias(T) = c0 + c1 (T - 35)
@@ -247,3 +247,147 @@ def test_bad_input(run_cli, calibration, tmp_path):
         tmp_path / "c.csv",
     )
     assert code == 0 and "outside the calibrated range" in stderr and "by up to" in stderr
+
+
+def test_learned_drift_given_its_scale_is_the_fixed_drift():
+    """drift="auto" at a given s is the prior calibration with s^2 / h^(2j) added to the
+    variance of c_j (h = 10: the range 25-45 about T0 = 35), its normalisation included."""
+    values, temperature = warm_up(6, n=2000)
+    record = ThermalRecord(values, temperature, RATE, ((0, 1000), (1000, 2000)))
+    prior = (np.array([0.49, 0.011]), np.array([[1e-6, 1e-8], [1e-8, 1e-8]]))
+    common = {
+        "noise_terms": ("white",),
+        "allan": bc.allan_deviation(values, RATE),
+        "coefficient_prior": prior,
+        "offset_prior": [(0.0, 0.001), None],
+        "calibrated_range": (25.0, 45.0),
+    }
+    learned = thermal_problem(record, 1, 35.0, drift="auto", **common)
+    assert learned.parameters == ("N", "drift")
+    scale = 0.004
+    fixed = thermal_problem(record, 1, 35.0, drift=scale, **common)
+    inflated = prior[1] + np.diag([scale**2, (scale / 10) ** 2])
+    np.testing.assert_allclose(fixed.prior_precision[:2, :2], np.linalg.inv(inflated))
+    differences = []
+    for log_n in (np.log(0.004), np.log(0.006)):
+        theta = np.array([log_n, np.log(scale)])
+        _, precision, _ = learned.prior(theta)
+        np.testing.assert_allclose(precision, fixed.prior_precision, rtol=1e-9)
+        differences.append(
+            float(learned.log_posterior(theta) - fixed.log_posterior(np.array([log_n])))
+        )
+    location, spread = learned.drift_prior
+    expected = (
+        -0.5 * np.linalg.slogdet(inflated)[1] - 0.5 * ((np.log(scale) - location) / spread) ** 2
+    )
+    np.testing.assert_allclose(differences, expected, rtol=1e-9)
+
+
+def test_a_quantized_temperature_identifies_high_degrees_late():
+    """A temperature sensor with 0.1 degC steps sits on one or two values for the first blocks
+    of a slow warm-up: degree d needs d + 1 distinct block temperatures before its flat-prior
+    predictive exists (choose_degree starts scoring there, or drops the degree)."""
+    temperature = np.round(np.linspace(25.0, 26.0, 9600), 1)
+    values = 0.01 * np.random.default_rng(0).standard_normal(temperature.size)
+    record = ThermalRecord(values, temperature, RATE, ((0, values.size),))
+    common = {"noise_terms": ("white",), "allan": bc.allan_deviation(values, RATE)}
+    starts = [
+        _identified_from(thermal_problem(record, degree, 25.5, **common).design)
+        for degree in range(5)
+    ]
+    # 100 samples a block: the first 4.8 blocks all read 25.0, so a slope needs 5 blocks.
+    assert starts[:2] == [1, 5] and all(np.diff(starts) > 0)
+
+
+AGING = {"lab": np.array([0.50, 0.0100, -2.0e-4]), "now": np.array([0.51, 0.0108, -2.0e-4])}
+
+
+def lab_calibration(rng):
+    """An honest lab calibration of the quadratic bias AGING["lab"] (20-45 degC, T0 = 35): its
+    coefficients drawn from its own stated covariance about the lab truth."""
+    lab_temperature = 45 - 25 * np.exp(-np.linspace(0, 1800, 96) / 500)
+    design = (lab_temperature[:, None] - 35) ** np.arange(3)
+    covariance = 0.004**2 * np.linalg.inv(design.T @ design)
+    mean = AGING["lab"] + np.linalg.cholesky(covariance) @ rng.standard_normal(3)
+    return {
+        "schema": "bayescal.thermal_calibration",
+        "schema_version": 1,
+        "channel": "gyro_z",
+        "unit": "deg/s",
+        "temperature_unit": "degC",
+        "reference_temperature": 35.0,
+        "degree": 2,
+        "coefficients": mean.tolist(),
+        "coefficient_units": ["deg/s", "deg/s/degC", "deg/s/degC^2"],
+        "covariance": covariance.tolist(),
+        "temperature_range": [20.0, 45.0],
+        "noise": {"terms": ["white"], "N": {"mean": 0.005, "q05": 0.00495, "q95": 0.00505}},
+        "earth_rate": None,
+        "provenance": [{"step": "fit", "source": "simulated lab warm-up"}],
+    }
+
+
+def test_update_of_an_aged_sensor_covers_the_truth(run_cli, tmp_path):
+    """The sensor has aged since its lab calibration (bias +0.01 deg/s, slope +8 %: several
+    of the calibration's standard deviations, as aging is); six alignments between 30 and 36
+    degC, offsets measured to 1 mdeg/s, update it. At the temperatures the alignments do not
+    reach, the updated bias must beat the old calibration and its 90 % band must cover the
+    truth: at least 75 % of the held-out points over three scenarios (nominal 90 %; an update
+    that takes the old calibration as exact, --drift 0, covers under half of them)."""
+    held_out = np.concatenate([np.linspace(20, 29, 10), np.linspace(37, 45, 9)])
+    design = (held_out[:, None] - 35) ** np.arange(3)
+    truth = design @ AGING["now"]
+    covered, better = [], []
+    for seed in range(3):
+        rng = np.random.default_rng(100 + seed)
+        calibration = lab_calibration(rng)
+        cal = tmp_path / f"cal{seed}.json"
+        cal.write_text(json.dumps(calibration))
+        model = NoiseModel(rate_hz=RATE, N=0.005)
+        keys = jax.random.split(jax.random.PRNGKey(100 + seed), 6)
+        values, temperature, periods, measured = [], [], [], []
+        for p, centre in enumerate(np.linspace(30, 36, 6)):
+            t_period = centre + 0.3 * np.sin(np.arange(1200) / 150 + rng.uniform(0, 6))
+            offset = rng.normal(0, 0.003)
+            powers = (t_period[:, None] - 35) ** np.arange(3)
+            values.append(
+                powers @ AGING["now"] + offset + np.asarray(model.simulate(keys[p], 1200))
+            )
+            temperature.append(t_period)
+            periods.append(f"{120 * p}:{120 * (p + 1)}")
+            measured.append(f"{offset + rng.normal(0, 0.001):.6f}±0.001")
+        values, temperature = np.concatenate(values), np.concatenate(temperature)
+        recording = write(
+            tmp_path / f"field{seed}.csv",
+            [np.arange(values.size) / RATE, values, temperature],
+            "time,gyro_z[deg/s],temperature",
+        )
+        updated = tmp_path / f"new{seed}.json"
+        code, _, stderr = run_cli(
+            "thermal",
+            "update",
+            recording,
+            "--channel",
+            "gyro_z",
+            "--calibration",
+            cal,
+            "--periods",
+            ",".join(periods),
+            "--offset-measurement=" + ",".join(measured),
+            "--seed",
+            str(seed),
+            "--quiet",
+            "--json",
+            updated,
+        )
+        assert code == 0, stderr
+        document = json.loads(updated.read_text())
+        assert document["drift"]["learned"] and document["drift"]["scale"] > 0
+        mean, covariance = np.asarray(document["coefficients"]), np.asarray(document["covariance"])
+        error = design @ mean - truth
+        sd = np.sqrt(np.einsum("ij,jk,ik->i", design, covariance, design))
+        covered.append(np.mean(np.abs(error) <= 1.645 * sd))
+        old_error = design @ np.asarray(calibration["coefficients"]) - truth
+        better.append(np.sqrt(np.mean(error**2)) < np.sqrt(np.mean(old_error**2)))
+    assert all(better)
+    assert np.mean(covered) >= 0.75, covered

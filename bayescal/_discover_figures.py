@@ -1,0 +1,200 @@
+"""Before/after curves and figures of a discovery, and its posterior as ArviZ data."""
+
+import json
+from importlib.metadata import version
+from pathlib import Path
+
+
+def _curve(checks: list, name: str) -> dict:
+    for check in checks:
+        if check["name"] == name:
+            return check.get("curve", {})
+    return {}
+
+
+def diagnostics(result) -> dict:
+    """The curves behind the figures: Allan deviation of the residual with the model's 90 %
+    band, the binned spectrum of the increments with each model's, and the residual block
+    means over time (and against the temperature) — before (baseline) and after (final)."""
+    from ._discover import _bin_ratios
+
+    before, after = result.baseline_checks, result.final_checks
+    allan_before, allan_after = _curve(before, "allan_deviation"), _curve(after, "allan_deviation")
+    summary = result.baseline.design.summary
+    _, model_before = _bin_ratios(result.baseline)
+    ratio_after, model_after = _bin_ratios(result.final)
+    time_before, time_after = _curve(before, "residual_time"), _curve(after, "residual_time")
+    out = {
+        "allan": {
+            "tau_s": allan_before.get("tau_s", []),
+            "adev": allan_before.get("adev", []),
+            "baseline_low": allan_before.get("model_low", []),
+            "baseline_high": allan_before.get("model_high", []),
+            "final_adev": allan_after.get("adev", []),
+            "final_low": allan_after.get("model_low", []),
+            "final_high": allan_after.get("model_high", []),
+            "unit": result.data.unit,
+        },
+        "spectrum": {
+            "frequency_hz": summary.frequency_hz.tolist(),
+            "power": (summary.moment0 / summary.count).tolist(),
+            "baseline_model": model_before.tolist(),
+            "final_power": (ratio_after * model_after / summary.count).tolist(),
+            "final_model": model_after.tolist(),
+            "unit": f"({result.data.unit})^2 per increment",
+        },
+        "residual": {
+            "time_s": time_before.get("time_s", []),
+            "baseline": time_before.get("residual", []),
+            "final": time_after.get("residual", []),
+            "unit": result.data.unit,
+        },
+    }
+    temperature_before = _curve(before, "residual_vs_temperature")
+    if temperature_before:
+        out["temperature"] = {
+            "temperature": temperature_before["covariate"],
+            "baseline": temperature_before["residual"],
+            "final": _curve(after, "residual_vs_temperature").get("residual", []),
+            "unit": result.data.unit,
+            "temperature_unit": result.data.temperature_unit,
+        }
+    return out
+
+
+def _figures(curves: dict, channel: str) -> dict:
+    """name -> matplotlib figure, each showing the baseline beside the final model."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot as plt
+
+    figures = {}
+    allan = curves["allan"]
+    figure, axis = plt.subplots(figsize=(6.4, 4.2))
+    axis.loglog(allan["tau_s"], allan["adev"], "k.-", label="recording")
+    axis.fill_between(
+        allan["tau_s"],
+        allan["baseline_low"],
+        allan["baseline_high"],
+        color="tab:red",
+        alpha=0.3,
+        label="baseline model, 90 % band",
+    )
+    if allan["final_adev"]:
+        axis.loglog(
+            allan["tau_s"][: len(allan["final_adev"])],
+            allan["final_adev"],
+            "b.--",
+            label="recording less the added deterministic terms",
+        )
+        axis.fill_between(
+            allan["tau_s"][: len(allan["final_low"])],
+            allan["final_low"],
+            allan["final_high"],
+            color="tab:blue",
+            alpha=0.3,
+            label="final model, 90 % band",
+        )
+    axis.set(
+        xlabel="τ [s]",
+        ylabel=f"Allan deviation [{allan['unit']}]",
+        title=f"{channel}: Allan deviation before and after",
+    )
+    axis.legend(fontsize=8)
+    figures["allan"] = figure
+
+    spectrum = curves["spectrum"]
+    figure, axis = plt.subplots(figsize=(6.4, 4.2))
+    axis.loglog(
+        spectrum["frequency_hz"],
+        spectrum["power"],
+        color="0.5",
+        lw=0.8,
+        label="recording (increments, binned)",
+    )
+    axis.loglog(spectrum["frequency_hz"], spectrum["baseline_model"], "r", label="baseline model")
+    axis.loglog(
+        spectrum["frequency_hz"],
+        spectrum["final_power"],
+        color="tab:cyan",
+        lw=0.8,
+        label="recording less the deterministic terms",
+    )
+    axis.loglog(spectrum["frequency_hz"], spectrum["final_model"], "b--", label="final model")
+    axis.set(
+        xlabel="frequency [Hz]",
+        ylabel=f"periodogram [{spectrum['unit']}]",
+        title=f"{channel}: spectrum before and after",
+    )
+    axis.legend(fontsize=8)
+    figures["spectrum"] = figure
+
+    residual = curves["residual"]
+    figure, axis = plt.subplots(figsize=(6.4, 4.2))
+    axis.plot(residual["time_s"], residual["baseline"], "r.-", label="baseline residual")
+    axis.plot(residual["time_s"], residual["final"], "b.-", label="final residual")
+    axis.axhline(0, color="k", lw=0.5)
+    axis.set(
+        xlabel="time [s]",
+        ylabel=f"block mean of residual [{residual['unit']}]",
+        title=f"{channel}: residual over time",
+    )
+    axis.legend(fontsize=8)
+    figures["residual_time"] = figure
+
+    if "temperature" in curves:
+        temperature = curves["temperature"]
+        figure, axis = plt.subplots(figsize=(6.4, 4.2))
+        axis.plot(temperature["temperature"], temperature["baseline"], "r.", label="baseline")
+        axis.plot(temperature["temperature"], temperature["final"], "b.", label="final")
+        axis.set(
+            xlabel=f"temperature [{temperature['temperature_unit']}]",
+            ylabel=f"block mean of residual [{temperature['unit']}]",
+            title=f"{channel}: residual against temperature",
+        )
+        axis.legend(fontsize=8)
+        figures["residual_temperature"] = figure
+    return figures
+
+
+def posterior_datatree(posterior, document: dict):
+    import arviz_base
+
+    tree = arviz_base.from_dict(
+        {"posterior": dict(posterior.draws)},
+        attrs={
+            "/": {
+                "bayescal_version": version("bayescal"),
+                "inference_library": "emcee",
+                "channel": document["channel"],
+                "source": document["source"],
+                "final_terms": ",".join(document["final_terms"]),
+                "diagnostics": json.dumps(posterior.diagnostics.as_dict()),
+                "note": "nonlinear parameters found by search (time constants, frequencies) "
+                "are held at their located values; see the JSON for their intervals",
+            }
+        },
+    )
+    for name, unit in posterior.units.items():
+        tree["posterior"][name].attrs["units"] = unit
+    return tree
+
+
+def write_folder(folder: Path, result, posterior, document: dict) -> None:
+    """Figures (PNG), the curves and the findings (JSON), the final posterior (netCDF)."""
+    from ._output import write_json
+    from ._posterior_data import write_netcdf
+
+    folder = Path(folder)
+    folder.mkdir(exist_ok=True)
+    stem = f"discover_{document['channel']}"
+    curves = document.get("diagnostics") or diagnostics(result)
+    for name, figure in _figures(curves, document["channel"]).items():
+        temporary = folder / f".{stem}_{name}.png.part"
+        figure.savefig(temporary, format="png", dpi=110, bbox_inches="tight")
+        temporary.replace(folder / f"{stem}_{name}.png")
+        figure.clear()
+    if posterior is not None:
+        write_netcdf(posterior_datatree(posterior, document), folder / f"{stem}_posterior.nc")
+    write_json(folder / f"{stem}.json", document)

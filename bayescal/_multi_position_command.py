@@ -1,0 +1,442 @@
+"""``bayescal multi-position``: reading the three accelerometer channels, the poses, and the
+classical and Bayesian calibrations (:mod:`bayescal._multi_position`) as data and as the table
+the command prints.
+
+The model, its optimiser and sampler load when the command runs, not when the command line's
+parser is built (as for the other commands).
+"""
+
+import sys
+from importlib.metadata import version
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ._errors import InputError
+from ._sections import MIN_DURATION_S
+from ._units import parse_unit
+
+if TYPE_CHECKING:
+    from ._gravity import LocalGravity
+    from ._multi_position import BayesianCalibration, ClassicalCalibration, Poses
+
+MODEL = {
+    "free": "a = T K (r - b), T = [[1, -a_yz, a_zy], [0, 1, -a_zx], [0, 0, 1]], K = diag(scale); "
+    "free orientations: ||T K (m_i - b)|| = g_local for each pose mean m_i (Tedaldi, Pretto & "
+    "Menegatti, ICRA 2014)",
+    "six-face": "m_i = M f_i + b with f_i = +-g_local e_axis of the pose's face, "
+    "M^-1 = R T K (Ferraris et al. 1995); a = T K (r - b) in the sensor's body frame and "
+    "R T K (r - b) in the fixture's, R the rotation by the rotation vector (rotation_x, y, z)",
+}
+
+
+def parse_sections(text: str) -> list[tuple[float, float]]:
+    """``--sections T0:T1,T0:T1,...`` in seconds from the first sample."""
+    sections = []
+    for part in text.split(","):
+        try:
+            start, stop = (float(x) for x in part.split(":"))
+        except ValueError:
+            raise InputError(
+                f"--sections {text!r}: cannot read {part.strip()!r}",
+                fix="write START:STOP,START:STOP,... in seconds from the first sample",
+            ) from None
+        if not stop > start:
+            raise InputError(f"--sections: {part.strip()} ends before it starts")
+        sections.append((start, stop))
+    return sections
+
+
+def read_recording(args):
+    """The three channels on one time base: (values (n, 3), rate, start_s, unit, notes)."""
+    from ._recording import load_table, prepare_channel
+
+    table = load_table(args.file)
+    channels = [
+        prepare_channel(
+            table,
+            name,
+            unit=args.unit,
+            rate=args.rate,
+            time_column=args.time_column,
+            time_unit=args.time_unit,
+        )
+        for name in args.channels
+    ]
+    units = {data.unit for data in channels}
+    if len(units) > 1:
+        listed = ", ".join(f"{data.channel} [{data.unit}]" for data in channels)
+        raise InputError(
+            f"the channels have different units: {listed}",
+            source=table.source,
+            fix="give the unit of all three with --unit",
+        )
+    notes = list(dict.fromkeys(note for data in channels for note in data.notes))
+    first = channels[0]
+    return (
+        np.column_stack([data.values for data in channels]),
+        first.rate_hz,
+        first.start_s,
+        first.unit,
+        notes,
+        table.source,
+    )
+
+
+def _scale_unit(unit: str) -> str:
+    if parse_unit(unit).name == "m/s^2":
+        return "1"
+    return f"m/s^2/({unit})" if "/" in unit else f"m/s^2/{unit}"
+
+
+def parameter_units(names, unit: str) -> dict:
+    units = {"pose_scatter": "m/s^2", "g_local": "m/s^2"}
+    for name in names:
+        if name.startswith("scale_"):
+            units[name] = _scale_unit(unit)
+        elif name.startswith("offset_"):
+            units[name] = unit
+        else:
+            units[name] = "rad"
+    return units
+
+
+def _summary(draws: np.ndarray, map_value: float, map_sd: float, unit: str) -> dict:
+    draws = np.ravel(draws)
+    return {
+        "mean": float(draws.mean()),
+        "sd": float(draws.std(ddof=1)),
+        "q05": float(np.quantile(draws, 0.05)),
+        "q95": float(np.quantile(draws, 0.95)),
+        "map": map_value,
+        "map_sd": map_sd,
+        "unit": unit,
+    }
+
+
+def multi_position_result(
+    *,
+    source: str,
+    channels,
+    unit: str,
+    rate_hz: float,
+    poses: "Poses",
+    found_by: str,
+    gravity: "LocalGravity",
+    classical: "ClassicalCalibration",
+    bayesian: "BayesianCalibration | None",
+    notes: list[str],
+) -> dict:
+    """The JSON document of ``bayescal multi-position``."""
+    from ._multi_position import calibration_matrices
+
+    units = parameter_units(classical.names, unit)
+    pose_list = []
+    for i in range(poses.n):
+        entry = {
+            "start_s": float(poses.start_s[i]),
+            "stop_s": float(poses.stop_s[i]),
+            "n_samples": int(poses.count[i]),
+            "mean": poses.mean[i],
+            "sd": poses.sd[i],
+        }
+        if classical.face_labels is not None:
+            entry["face"] = classical.face_labels[i]
+        pose_list.append(entry)
+    matrices = calibration_matrices(classical.values, classical.six_face)
+    block = {
+        "parameters": {
+            name: {"value": value, "uncertainty": uncertainty, "unit": units[name]}
+            for name, (value, uncertainty) in classical.parameters.items()
+        },
+        "confidence": classical.confidence,
+        "degrees_of_freedom": classical.dof,
+        "residual_rms": {
+            "value": classical.residual_rms,
+            "unit": unit if classical.six_face else "m/s^2",
+            "of": "raw components m_i - M f_i - b"
+            if classical.six_face
+            else "magnitudes ||T K (m_i - b)|| - g",
+        },
+        "conditioning": classical.conditioning,
+        "matrices": {
+            **matrices,
+            "units": {
+                "misalignment_T": "1",
+                "scale_K": _scale_unit(unit),
+                "calibration_TK": _scale_unit(unit),
+                "sensitivity": f"{unit} per m/s^2 (rows: sensing axes in the body frame)",
+                "offset_b": unit,
+                **(
+                    {
+                        "rotation_R": "1",
+                        "sensitivity_fixture": f"{unit} per m/s^2 (Ferraris' M; rows: sensing "
+                        "axes in the fixture frame)",
+                    }
+                    if classical.six_face
+                    else {}
+                ),
+            },
+        },
+        "method": "least squares with g fixed at g_local (Levenberg-Marquardt), covariance "
+        "s^2 (J^T J)^-1 with s^2 the residual variance over the degrees of freedom, Student-t "
+        "half-widths; the scales include gravity's uncertainty",
+    }
+    parsed = parse_unit(unit)
+    if parsed.quantity == "acceleration":
+        # Scales (m/s^2 per m/s^2) and offsets (m/s^2) again in SI, as two-position gives them.
+        block["si"] = {}
+        for name, (value, uncertainty) in classical.parameters.items():
+            if name.startswith("scale_"):
+                factor, si_unit = 1 / parsed.to_si, "1"
+            elif name.startswith("offset_"):
+                factor, si_unit = parsed.to_si, "m/s^2"
+            else:
+                continue
+            block["si"][name] = {
+                "value": value * factor,
+                "uncertainty": uncertainty * factor,
+                "unit": si_unit,
+            }
+    result = {
+        "bayescal_version": version("bayescal"),
+        "command": "multi-position",
+        "source": source,
+        "channels": list(channels),
+        "unit": unit,
+        "rate_hz": rate_hz,
+        "orientations": classical.orientations,
+        "model": MODEL[classical.orientations],
+        "poses": {
+            "count": poses.n,
+            "distinct_orientations": classical.distinct_orientations,
+            "found_by": found_by,
+            "unit": unit,
+            "list": pose_list,
+        },
+        "gravity": {
+            "value": gravity.value,
+            "uncertainty": gravity.uncertainty,
+            "unit": "m/s^2",
+            "uncertainty_is": "one standard deviation",
+            "source": gravity.source,
+        },
+        "notes": notes,
+        "classical": block,
+    }
+    if bayesian is not None:
+        parameters = {
+            name: _summary(
+                bayesian.draws[name], bayesian.map_values[name], bayesian.map_sd[name], units[name]
+            )
+            for name in bayesian.names
+        }
+        result["bayesian"] = {
+            "parameters": parameters,
+            "model": "each pose mean Gaussian: white-noise covariance of a mean (per-axis "
+            "variance / count) plus an isotropic pose scatter sigma_p in the calibrated frame; "
+            + (
+                "full 3-vector likelihood per pose"
+                if classical.six_face
+                else "orientations uniform on the sphere and integrated out (magnitude "
+                "residual, Jacobian |det T K| included)"
+            )
+            + "; g_local from its prior (the data cannot tell it from the scales)",
+            "priors": "scales log-normal at the classical value, sd 1 in the log; "
+            "misalignment angles N(0, 0.1 rad); mounting rotation N(0, 0.3 rad); offsets "
+            "normal at the classical value, sd 1 g; pose_scatter log-normal at the classical "
+            "residual RMS, sd 3 in the log",
+            "diagnostics": bayesian.diagnostics.as_dict(),
+            "comparison": _comparison(classical, parameters),
+        }
+    return result
+
+
+def _comparison(classical: "ClassicalCalibration", parameters: dict) -> list[str]:
+    """Where the two answers disagree beyond their uncertainties, and why."""
+    from scipy import stats
+
+    notes = []
+    t = float(stats.t.ppf(0.5 + classical.confidence / 2, classical.dof))
+    for name, (value, half_width) in classical.parameters.items():
+        posterior = parameters[name]
+        standard_error = half_width / t
+        if abs(posterior["mean"] - value) > half_width:
+            notes.append(
+                f"{name}: the posterior mean {posterior['mean']:.6g} lies outside the classical "
+                f"interval {value:.6g} +- {half_width:.3g}: the posterior weights each pose by "
+                "its own noise, the classical fit weights all poses equally"
+            )
+        elif posterior["sd"] > 1.5 * standard_error:
+            notes.append(
+                f"{name}: the posterior sd is {posterior['sd'] / standard_error:.3g}x the "
+                "classical standard error: the pose scatter is poorly known from "
+                f"{classical.dof} degrees of freedom"
+            )
+    return notes
+
+
+def multi_position_text(result: dict) -> str:
+    classical = result["classical"]
+    percent = f"{100 * classical['confidence']:g}%"
+    poses = result["poses"]
+    gravity = result["gravity"]
+    residual = classical["residual_rms"]
+    lines = [
+        f"bayescal multi-position: {','.join(result['channels'])} [{result['unit']}], "
+        f"{result['orientations']} orientations",
+        f"  poses: {poses['count']} ({poses['distinct_orientations']} distinct orientations); "
+        f"{poses['found_by']}",
+        f"  g_local {gravity['value']:.7g} +- {gravity['uncertainty']:.2g} m/s^2 "
+        f"(1 sd; {gravity['source']})",
+        f"  classical residual RMS {residual['value']:.3g} {residual['unit']} "
+        f"({classical['degrees_of_freedom']} degrees of freedom)",
+        "",
+        f"  {'':17}{'classical (' + percent + ' half-width)':<32}"
+        f"{'Bayesian mean [90%]' if 'bayesian' in result else '':<44}unit",
+    ]
+    bayesian = result.get("bayesian", {}).get("parameters", {})
+    for name, entry in classical["parameters"].items():
+        row = f"{entry['value']:.7g} +- {entry['uncertainty']:.2g}"
+        posterior = ""
+        if name in bayesian:
+            p = bayesian[name]
+            posterior = f"{p['mean']:.7g} [{p['q05']:.6g}, {p['q95']:.6g}]"
+        lines.append(f"  {name:<17}{row:<32}{posterior:<44}{entry['unit']}")
+    for name in ("pose_scatter", "g_local"):
+        if name in bayesian:
+            p = bayesian[name]
+            posterior = f"{p['mean']:.4g} [{p['q05']:.4g}, {p['q95']:.4g}]"
+            lines.append(f"  {name:<17}{'':<32}{posterior:<44}{p['unit']}")
+    if "bayesian" in result:
+        diagnostics = result["bayesian"]["diagnostics"]
+        lines.append(
+            "  posterior checks "
+            + (
+                "passed"
+                if diagnostics["passed"]
+                else "FAILED: " + "; ".join(diagnostics["failures"])
+            )
+        )
+        lines += [f"  - {note}" for note in result["bayesian"]["comparison"]]
+    lines += [f"  note: {note}" for note in result["notes"]]
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    """``bayescal multi-position``: 0 success, 1 a failed posterior health check, 2 bad input."""
+    from ._gravity import local_gravity
+    from ._multi_position import (
+        ORIENTATIONS,
+        bayesian_multi_position,
+        check_unit,
+        classical_multi_position,
+        find_poses,
+    )
+    from ._output import check_writable, write_json
+
+    if args.orientations not in ORIENTATIONS:
+        raise InputError(
+            f"--orientations {args.orientations!r} is not known", fix="choose free or six-face"
+        )
+    if args.json:
+        check_writable(args.json, "--json")
+    gravity = local_gravity(args.latitude, args.height, args.g_local)
+    sections = parse_sections(args.sections) if args.sections else None
+    values, rate_hz, start_s, unit, notes, source = read_recording(args)
+    if sections is None and np.isnan(values).any():
+        raise InputError(
+            "still poses cannot be found across gaps or dropped samples",
+            source=source,
+            fix="give the poses with --sections",
+        )
+    try:
+        poses = find_poses(values, rate_hz, sections=sections, start_s=start_s, unit=unit)
+        check_unit(poses, unit)
+        classical = classical_multi_position(
+            poses, gravity, orientations=args.orientations, confidence=args.confidence
+        )
+    except InputError as error:
+        raise InputError(error.problem, source=source, fix=error.fix) from None
+    bayesian = None
+    if not args.classical_only:
+        bayesian = bayesian_multi_position(
+            poses, classical, seed=args.seed, progress=not args.quiet and sys.stderr.isatty()
+        )
+    found_by = (
+        "--sections"
+        if sections
+        else f"still sections of at least {MIN_DURATION_S:g} s found in the record"
+    )
+    result = multi_position_result(
+        source=source,
+        channels=args.channels,
+        unit=unit,
+        rate_hz=rate_hz,
+        poses=poses,
+        found_by=found_by,
+        gravity=gravity,
+        classical=classical,
+        bayesian=bayesian,
+        notes=notes,
+    )
+    if args.json:
+        write_json(args.json, result)
+    print(multi_position_text(result))
+    if bayesian is not None and not bayesian.diagnostics.passed:
+        print(
+            "bayescal multi-position: HEALTH CHECK FAILED: "
+            + "; ".join(bayesian.diagnostics.failures),
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def add_parser(commands):
+    """Register ``multi-position`` on the subparsers object of ``bayescal``'s parser."""
+    from ._cli import _columns, _confidence, _positive_float
+
+    parser = commands.add_parser(
+        "multi-position",
+        help="accelerometer scale, offset and misalignment from many static poses",
+        description="Multi-position calibration of a three-axis accelerometer: per-axis scale, "
+        "offset and the three misalignment angles from still poses, by gravity's magnitude "
+        "alone (free orientations, imu_tk; 10 or more poses in 9 or more orientations) or with "
+        "the six faces of a cube (six-face, Ferraris); classical least squares and Bayesian.",
+    )
+    parser.add_argument("file", help="one recording holding every pose")
+    parser.add_argument(
+        "--channels",
+        type=_columns,
+        required=True,
+        metavar="X,Y,Z",
+        help="the three accelerometer columns, e.g. acc_x,acc_y,acc_z",
+    )
+    parser.add_argument(
+        "--unit", help="unit of the channels (m/s^2, g, or a count unit such as LSB)"
+    )
+    parser.add_argument("--rate", type=_positive_float, metavar="HZ")
+    parser.add_argument("--time-column", metavar="NAME")
+    parser.add_argument("--time-unit", metavar="UNIT")
+    parser.add_argument(
+        "--sections",
+        metavar="T0:T1,...",
+        help="the still poses in seconds from the first sample (default: found)",
+    )
+    parser.add_argument(
+        "--orientations",
+        default="free",
+        help="free: any orientations, gravity's magnitude only (default); six-face: each pose "
+        "on a face of a cube, every face at least once",
+    )
+    parser.add_argument("--latitude", type=float, metavar="DEG", help="geodetic latitude")
+    parser.add_argument("--height", type=float, metavar="M", help="height above the ellipsoid")
+    parser.add_argument("--g-local", metavar="VALUE[±U]", help="local gravity in m/s^2 instead")
+    parser.add_argument("--confidence", type=_confidence, default=0.95)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--classical-only", action="store_true", help="skip the Bayesian model")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    parser.set_defaults(run=run)
+    return parser

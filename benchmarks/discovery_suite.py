@@ -1,0 +1,238 @@
+"""Discovery on simulated recordings with concealed effects: confusion table, accuracy,
+false alarms and the coverage of the named effects' 90 % intervals.
+
+Each recording is a static gyro (50 or 100 Hz, 30 to 120 min, white noise of 0.05 deg/s per
+sample) hiding zero, one or two catalogue effects, every one at an amplitude below the
+per-sample white-noise level (invisible in a plot of the raw signal), with random
+parameters; clean controls come with and without an irrelevant varying temperature.
+
+    python benchmarks/discovery_suite.py [--recordings 32] [--seed 0] [--workers 2]
+"""
+
+import argparse
+import math
+import multiprocessing
+import sys
+import time
+from collections import Counter
+
+import numpy as np
+
+WHITE_SD = 0.05  # deg/s per sample
+EFFECTS = (
+    "thermal_bias",
+    "warmup_transient",
+    "sinusoid",
+    "rate_random_walk",
+    "gauss_markov",
+    "rate_ramp",
+    "bias_instability",
+)
+PAIRS = (
+    ("thermal_bias", "sinusoid"),
+    ("warmup_transient", "rate_random_walk"),
+    ("gauss_markov", "sinusoid"),
+    ("rate_ramp", "sinusoid"),
+    ("thermal_bias", "rate_random_walk"),
+    ("bias_instability", "sinusoid"),
+    ("warmup_transient", "sinusoid"),
+    ("thermal_bias", "gauss_markov"),
+)
+
+
+def plan(count: int, rng) -> list[tuple[str, ...]]:
+    """Hidden effects of each recording: 1/8 clean, 1/8 clean with a temperature, 1/2 single
+    effects in turn, 1/4 pairs in turn."""
+    clean = max(2, count // 8)
+    plans = [()] * clean + [("clean_temperature",)] * clean
+    singles = count // 2
+    plans += [(EFFECTS[i % len(EFFECTS)],) for i in range(singles)]
+    plans += [PAIRS[i % len(PAIRS)] for i in range(count - len(plans))]
+    order = rng.permutation(len(plans))
+    return [plans[i] for i in order]
+
+
+def temperature_profile(time_s, rng):
+    """Warm-up of the sensor plus a wandering ambient (a smoothed random walk) and an HVAC
+    cycle: the temperature of a real bench, in degC."""
+    duration = time_s[-1]
+    warm = rng.uniform(5, 15) * -np.expm1(-time_s / rng.uniform(300, 1200))
+    coarse = np.cumsum(rng.normal(size=64)) * rng.uniform(0.2, 0.5)
+    ambient = np.interp(time_s, np.linspace(0, duration, 64), coarse)
+    cycle = rng.uniform(0.5, 1.5) * np.sin(2 * np.pi * time_s / rng.uniform(600, 1800))
+    return 22.0 + warm + ambient + cycle
+
+
+def simulate(hidden, rng, seed):
+    """The recording and the true parameters of each hidden effect."""
+    import jax
+
+    from bayescal._noise_model import NoiseModel
+
+    rate = float(rng.choice([50.0, 100.0], p=[0.7, 0.3]))
+    minutes = float(rng.choice([30, 45, 60, 90, 120], p=[0.35, 0.25, 0.2, 0.1, 0.1]))
+    n = int(minutes * 60 * rate)
+    t = np.arange(n) / rate
+    duration = n / rate
+    values = 0.2 + WHITE_SD * rng.standard_normal(n)
+    truth = {}
+    with_temperature = "thermal_bias" in hidden or "clean_temperature" in hidden
+    with_temperature = with_temperature or rng.random() < 0.5
+    temperature = temperature_profile(t, rng) if with_temperature else None
+    amplitude = lambda: rng.uniform(0.3, 0.8) * WHITE_SD  # noqa: E731
+    for effect in hidden:
+        match effect:
+            case "thermal_bias":
+                span = np.ptp(temperature)
+                c1 = amplitude() / span * rng.choice([-1, 1])
+                values += c1 * (temperature - temperature.mean())
+                truth[effect] = {"c1": c1}
+            case "warmup_transient":
+                a, tau = amplitude() * rng.choice([-1, 1]), rng.uniform(120, 600)
+                values += a * np.exp(-t / tau)
+                truth[effect] = {"warmup_amplitude": a, "time_constant": tau}
+            case "sinusoid":
+                a, f = rng.uniform(0.05, 0.2) * WHITE_SD, rng.uniform(0.5, 0.4 * rate)
+                values += a * np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi))
+                truth[effect] = {"amplitude": a, "frequency": f}
+            case "rate_random_walk":
+                k = amplitude() / math.sqrt(duration)
+                values += k * np.cumsum(rng.standard_normal(n)) / math.sqrt(rate)
+                truth[effect] = {"K": k}
+            case "gauss_markov":
+                from scipy.signal import lfilter
+
+                sigma, tau = rng.uniform(0.2, 0.5) * WHITE_SD, rng.uniform(30, 300)
+                phi = math.exp(-1 / (rate * tau))
+                drive = rng.standard_normal(n) * sigma * math.sqrt(1 - phi * phi)
+                values += lfilter([1.0], [1.0, -phi], drive)
+                truth[effect] = {"sigma_gm": sigma, "time_constant": tau}
+            case "rate_ramp":
+                r = amplitude() / duration * rng.choice([-1, 1])
+                values += r * t
+                truth[effect] = {"R": r}
+            case "bias_instability":
+                b = rng.uniform(0.05, 0.15) * WHITE_SD
+                model = NoiseModel(rate, B=b)
+                values += np.asarray(model.simulate(jax.random.PRNGKey(seed), n))
+                truth[effect] = {"B": b}
+    return values, rate, temperature, truth
+
+
+def run_one(arguments):
+    index, hidden, seed = arguments
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    from bayescal._discover import DiscoveryData, discover, effect_parameters, sample_final
+
+    rng = np.random.default_rng(seed)
+    values, rate, temperature, truth = simulate(hidden, rng, seed)
+    data = DiscoveryData(
+        values=values, rate_hz=rate, channel="gyro_x", unit="deg/s", temperature=temperature
+    )
+    start = time.perf_counter()
+    result = discover(data)
+    posterior = sample_final(result.final, data, seed=seed) if result.findings else None
+    elapsed = time.perf_counter() - start
+    found = [finding.name for finding in result.findings]
+    covered = {}
+    for finding in result.findings:
+        if finding.name not in truth:
+            continue
+        parameters = effect_parameters(finding.name, finding, posterior, data)
+        for name, true_value in truth[finding.name].items():
+            summary = parameters.get(name)
+            if summary and "q05" in summary:
+                covered[f"{finding.name}.{name}"] = bool(
+                    summary["q05"] <= true_value <= summary["q95"]
+                )
+    return {
+        "index": index,
+        "hidden": [h for h in hidden if h != "clean_temperature"],
+        "clean_temperature": "clean_temperature" in hidden,
+        "found": found,
+        "covered": covered,
+        "seconds": elapsed,
+        "n": values.size,
+        "rate": rate,
+        "health": posterior.diagnostics.passed if posterior else True,
+    }
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--recordings", type=int, default=32)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--workers", type=int, default=2)
+    args = parser.parse_args()
+    rng = np.random.default_rng(args.seed)
+    plans = plan(args.recordings, rng)
+    jobs = [(i, hidden, args.seed * 1000 + i) for i, hidden in enumerate(plans)]
+    started = time.perf_counter()
+    with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
+        results = []
+        for result in pool.imap_unordered(run_one, jobs):
+            results.append(result)
+            print(
+                f"  #{result['index']:02d} {result['n'] / result['rate'] / 60:5.0f} min "
+                f"{result['rate']:4.0f} Hz  hidden {','.join(result['hidden']) or '-':<36} "
+                f"found {','.join(result['found']) or '-':<36} {result['seconds']:6.1f} s",
+                flush=True,
+            )
+    results.sort(key=lambda r: r["index"])
+    wall = time.perf_counter() - started
+
+    print(f"\ndiscovery suite: {len(results)} recordings, {wall:.0f} s wall")
+    named, present = Counter(), Counter()
+    confusion = {effect: Counter() for effect in EFFECTS}
+    exact = 0
+    for result in results:
+        hidden, found = set(result["hidden"]), set(result["found"])
+        exact += hidden == found
+        for effect in hidden:
+            present[effect] += 1
+            named[effect] += effect in found
+            for other in found - hidden:
+                confusion[effect][other] += 1
+            if effect not in found:
+                confusion[effect]["(missed)"] += 1
+    print("\neffect                 recordings  named   rate   confused with")
+    for effect in EFFECTS:
+        if present[effect]:
+            others = ", ".join(f"{k} x{v}" for k, v in confusion[effect].items()) or "-"
+            print(
+                f"{effect:<22} {present[effect]:>10} {named[effect]:>6} "
+                f"{named[effect] / present[effect]:6.2f}   {others}"
+            )
+    controls = [r for r in results if not r["hidden"]]
+    alarms = [r for r in controls if r["found"]]
+    print(
+        f"\nclean controls: {len(controls)} ({sum(r['clean_temperature'] for r in controls)} "
+        f"with an irrelevant temperature); false alarms: {len(alarms)} "
+        f"({len(alarms) / max(1, len(controls)):.2f})"
+    )
+    total_hidden = sum(present.values())
+    print(
+        f"effects named correctly: {sum(named.values())}/{total_hidden} "
+        f"({sum(named.values()) / total_hidden:.3f}); recordings with exactly the hidden "
+        f"set: {exact}/{len(results)} ({exact / len(results):.3f})"
+    )
+    coverage = Counter(), Counter()
+    for result in results:
+        for name, inside in result["covered"].items():
+            coverage[0][name] += inside
+            coverage[1][name] += 1
+    print("\n90 % interval covers the truth (named effects):")
+    for name in sorted(coverage[1]):
+        print(f"  {name:<36} {coverage[0][name]}/{coverage[1][name]}")
+    inside = sum(coverage[0].values())
+    print(f"  all parameters: {inside}/{sum(coverage[1].values())}")
+    print(f"posteriors failing a health check: {sum(not r['health'] for r in results)}")
+    seconds = [r["seconds"] for r in results]
+    print(f"time per recording: median {np.median(seconds):.1f} s, max {max(seconds):.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

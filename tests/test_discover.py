@@ -1,0 +1,169 @@
+"""Discovery against truth: seeded simulations with a concealed effect (below the per-sample
+noise) must be named, with intervals covering the true parameters; a clean recording must
+come back with no effect; look-alike effects are told apart by their signatures."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from bayescal._discover import (
+    DiscoveryData,
+    _gauss_markov_rate_autocovariance,
+    discover,
+    effect_parameters,
+    gauss_markov_allan_variance,
+    gauss_markov_increment_autocovariance,
+    sample_final,
+)
+
+RATE = 20.0
+MINUTES = 12
+WHITE_SD = 0.05
+
+
+def _record(seed, temperature=False):
+    rng = np.random.default_rng(seed)
+    n = int(MINUTES * 60 * RATE)
+    t = np.arange(n) / RATE
+    values = 0.1 + WHITE_SD * rng.standard_normal(n)
+    profile = None
+    if temperature:
+        coarse = np.cumsum(rng.normal(size=32)) * 0.4
+        profile = (
+            25
+            + 8 * -np.expm1(-t / 200)
+            + np.interp(t, np.linspace(0, t[-1], 32), coarse)
+            + np.sin(2 * np.pi * t / 300)
+        )
+    return t, values, profile, rng
+
+
+def _data(values, profile=None):
+    return DiscoveryData(
+        values=values, rate_hz=RATE, channel="gyro_x", unit="deg/s", temperature=profile
+    )
+
+
+def test_clean_recording_with_irrelevant_temperature_has_no_effect():
+    _, values, profile, _ = _record(1, temperature=True)
+    result = discover(_data(values, profile))
+    assert result.findings == ()
+    assert all(check["passed"] for check in result.final_checks)
+
+
+def test_concealed_sinusoid_is_named_and_its_parameters_covered():
+    t, values, _, _ = _record(2)
+    amplitude, frequency = 0.2 * WHITE_SD, 3.7
+    values = values + amplitude * np.sin(2 * np.pi * frequency * t + 0.4)
+    data = _data(values)
+    result = discover(data)
+    assert [f.name for f in result.findings] == ["sinusoid"]
+    before = {c["name"]: c for c in result.baseline_checks}
+    after = {c["name"]: c for c in result.final_checks}
+    assert not before["spectral_line"]["passed"] and after["spectral_line"]["passed"]
+    assert before["spectral_line"]["location"]["frequency_hz"] == pytest.approx(frequency, abs=0.01)
+    posterior = sample_final(result.final, data, seed=0)
+    assert posterior.diagnostics.passed, posterior.diagnostics.failures
+    parameters = effect_parameters("sinusoid", result.findings[0], posterior, data)
+    assert parameters["amplitude"]["q05"] <= amplitude <= parameters["amplitude"]["q95"]
+    assert parameters["frequency"]["q05"] <= frequency <= parameters["frequency"]["q95"]
+    assert parameters["amplitude"]["unit"] == "deg/s"
+
+
+def test_thermal_bias_is_told_from_a_random_walk_by_its_signature():
+    t, values, profile, rng = _record(3, temperature=True)
+    slope = 0.5 * WHITE_SD / np.ptp(profile)
+    thermal = _data(values + slope * (profile - profile.mean()), profile)
+    result = discover(thermal)
+    assert [f.name for f in result.findings] == ["thermal_bias"]
+    posterior = sample_final(result.final, thermal, seed=1)
+    c1 = effect_parameters("thermal_bias", result.findings[0], posterior, thermal)["c1"]
+    assert c1["q05"] <= slope <= c1["q95"]
+    assert c1["unit"] == "deg/s/degC"
+
+    walk = 0.6 * WHITE_SD / math.sqrt(t[-1]) * np.cumsum(rng.standard_normal(t.size))
+    walk /= math.sqrt(RATE)
+    result = discover(_data(values + walk, profile))
+    assert [f.name for f in result.findings] == ["rate_random_walk"]
+
+
+def test_gauss_markov_shapes_agree_with_each_other():
+    """The sampled autocovariance (averages over each period), summed into the Allan variance
+    of m-sample averages, gives the continuous-time closed form of IEEE Std 952; the
+    increments' autocovariance is its second difference."""
+    rate, time_constant = 10.0, 3.0
+    lags = np.arange(400)
+    gamma = _gauss_markov_rate_autocovariance(lags, rate, time_constant)
+    for m in (1, 5, 40, 150):
+        weights = np.concatenate((-np.ones(m), np.ones(m))) / m
+        correlation = np.correlate(weights, weights, mode="full")
+        allan = 0.5 * float(np.sum(correlation * gamma[np.abs(np.arange(-2 * m + 1, 2 * m))]))
+        assert allan == pytest.approx(
+            gauss_markov_allan_variance(m / rate, 1.0, time_constant), rel=1e-9
+        )
+    increments = gauss_markov_increment_autocovariance(rate, time_constant)(lags[1:-1])
+    second_difference = 2 * gamma[1:-1] - gamma[:-2] - gamma[2:]
+    np.testing.assert_allclose(increments, second_difference, rtol=1e-12)
+
+
+def test_cli_contract_and_outputs(run_cli, tmp_path):
+    t, values, profile, _ = _record(4, temperature=True)
+    values = values + 0.3 * WHITE_SD * np.exp(-t / 90)
+    path = tmp_path / "rec.csv"
+    np.savetxt(
+        path,
+        np.column_stack([t, values, profile]),
+        delimiter=",",
+        header="time,gyro_x[deg/s],temperature",
+        comments="",
+        fmt="%.8g",
+    )
+    output, folder = tmp_path / "findings.json", tmp_path / "report"
+    code, stdout, stderr = run_cli(
+        "discover", path, "--channel", "gyro_x", "--json", output, "--out", folder, "--quiet"
+    )
+    assert code == 0, stderr
+    document = json.loads(output.read_text())
+    assert document["channel"] == "gyro_x"
+    assert document["baseline"] == ["bias", "white"]
+    assert [e["name"] for e in document["effects"]] == ["warmup_transient"]
+    effect = document["effects"][0]
+    for key in ("explanation", "location", "evidence", "delta_elpd", "delta_elpd_se"):
+        assert key in effect
+    assert effect["evidence"]["log_bayes_factor"] > math.log(100)  # the decision rule
+    assert effect["delta_elpd"] > 0 and effect["delta_elpd_se"] > 0
+    assert effect["parameters"]["warmup_amplitude"]["unit"] == "deg/s"
+    assert effect["parameters"]["time_constant"]["unit"] == "s"
+    assert document["final_terms"] == ["bias", "white", "warmup_transient"]
+    names = {check["name"]: check for check in document["checks"]}
+    assert not names["residual_time"]["passed_before"]
+    assert names["residual_time"]["passed_after"]
+    for check in document["checks"]:
+        assert {"name", "statistic", "p_value", "location", "passed_after"} <= set(check)
+    for figure in ("allan", "spectrum", "residual_time"):
+        assert (folder / f"discover_gyro_x_{figure}.png").stat().st_size > 1000
+    assert (folder / "discover_gyro_x_posterior.nc").exists()
+    assert "warmup_transient" in stdout
+
+
+def test_bad_input_is_refused_with_exit_2(run_cli, tmp_path):
+    t, values, _, _ = _record(5)
+    path = tmp_path / "rec.csv"
+    np.savetxt(
+        path,
+        np.column_stack([t, values]),
+        delimiter=",",
+        header="time,gyro_x",
+        comments="",
+        fmt="%.8g",
+    )
+    output = tmp_path / "out.json"
+    code, _, stderr = run_cli(
+        "discover", path, "--channel", "gyro_x", "--baseline", "pink", "--json", output
+    )
+    assert code == 2 and "--baseline" in stderr and "pink" in stderr
+    code, _, stderr = run_cli("discover", path, "--channel", "gyro_q", "--json", output)
+    assert code == 2 and "gyro_q" in stderr
+    assert not output.exists()

@@ -1,0 +1,371 @@
+"""ROS bags in, Kalibr and MATLAB out: a simulated gyro written into ROS 1 and ROS 2 bags by
+rosbags' own writers reads back exactly as the same data in a CSV, and the exported imu.yaml
+and gyroparams/accelparams script carry the numbers of ``bayescal noise --json``."""
+
+import json
+import re
+
+import numpy as np
+import pytest
+
+yaml = pytest.importorskip("yaml")  # PyYAML, which Kalibr reads its imu.yaml with
+pytest.importorskip("rosbags")
+
+RATE = 100.0
+N_SAMPLES = 4096
+START_NS = 1_700_000_000_123_456_789
+G = 9.80665
+
+
+def _simulated_imu(seed=3):
+    """A static IMU in SI units: white noise plus a slow rate random walk on each axis."""
+    rng = np.random.default_rng(seed)
+    walk = np.cumsum(rng.standard_normal((N_SAMPLES, 6)), axis=0) * 2e-6
+    gyro = 0.003 + 1e-4 * np.sqrt(RATE) * rng.standard_normal((N_SAMPLES, 3)) + walk[:, :3]
+    acc = np.array([0.02, -0.01, G]) + 2e-3 * np.sqrt(RATE) * rng.standard_normal((N_SAMPLES, 3))
+    return gyro, acc + 50 * walk[:, 3:]
+
+
+def _imu_message(store, ros1, k, gyro, acc, stamp_ns, frame_id="imu_link"):
+    types = store.types
+    time = types["builtin_interfaces/msg/Time"](stamp_ns // 10**9, stamp_ns % 10**9)
+    header_type = types["std_msgs/msg/Header"]
+    header = header_type(k, time, frame_id) if ros1 else header_type(time, frame_id)
+    vector = types["geometry_msgs/msg/Vector3"]
+    zeros = np.zeros(9)
+    return types["sensor_msgs/msg/Imu"](
+        header,
+        types["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, 1.0),
+        zeros,
+        vector(*gyro),
+        zeros,
+        vector(*acc),
+        zeros,
+    )
+
+
+def write_bag(path, topics, *, kind="ros2", zero_stamps=False, frame_ids=None, strings=()):
+    """Write ``topics`` ({name: (gyro, acc)}) as sensor_msgs/Imu, and ``strings`` topics of
+    std_msgs/String, into a ROS 1 .bag (kind "ros1") or a ROS 2 bag (sqlite3 or mcap)."""
+    from rosbags.rosbag1 import Writer as Writer1
+    from rosbags.rosbag2 import StoragePlugin
+    from rosbags.rosbag2 import Writer as Writer2
+    from rosbags.typesys import Stores, get_typestore
+
+    ros1 = kind == "ros1"
+    store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.LATEST)
+    if ros1:
+        writer = Writer1(path)
+    else:
+        plugin = StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
+        writer = Writer2(path, version=9, storage_plugin=plugin)
+    serialize = store.serialize_ros1 if ros1 else store.serialize_cdr
+    imu_type, string_type = "sensor_msgs/msg/Imu", "std_msgs/msg/String"
+    with writer:
+        for name in strings:
+            connection = writer.add_connection(name, string_type, typestore=store)
+            message = store.types[string_type]("hello")
+            writer.write(connection, START_NS, serialize(message, string_type))
+        for name, (gyro, acc) in topics.items():
+            connection = writer.add_connection(name, imu_type, typestore=store)
+            for k in range(len(gyro)):
+                received = START_NS + k * 10_000_000 + 250_000  # recorded 0.25 ms later
+                stamp = 0 if zero_stamps else received - 250_000
+                frame_id = frame_ids[k % len(frame_ids)] if frame_ids else "imu_link"
+                message = _imu_message(store, ros1, k, gyro[k], acc[k], stamp, frame_id)
+                writer.write(connection, received, serialize(message, imu_type))
+    return path
+
+
+def write_csv(path, columns):
+    names = list(columns)
+    rows = zip(*(np.asarray(columns[name]).tolist() for name in names), strict=True)
+    path.write_text(
+        ",".join(names) + "\n" + "\n".join(",".join(repr(v) for v in row) for row in rows)
+    )
+    return path
+
+
+@pytest.fixture(scope="module")
+def recordings(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("formats")
+    gyro, acc = _simulated_imu()
+    topics = {"/imu": (gyro, acc)}
+    bags = {
+        "ros2": write_bag(folder / "run_ros2", topics),
+        "mcap": write_bag(folder / "run_mcap", topics, kind="mcap") / "run_mcap.mcap",
+        "ros1": write_bag(folder / "run.bag", topics, kind="ros1"),
+    }
+    bags["db3"] = folder / "run_ros2" / "run_ros2.db3"
+    time = np.arange(N_SAMPLES) / RATE
+    csv = write_csv(
+        folder / "run.csv",
+        {"time": time, "gyro_x[rad/s]": gyro[:, 0], "gyro_z[deg/s]": np.degrees(gyro[:, 2])}
+        | {"acc_y[g]": acc[:, 1] / G},
+    )
+    return {"folder": folder, "bags": bags, "csv": csv, "gyro": gyro, "acc": acc}
+
+
+def _noise_json(run_cli, path, tmp_path, *arguments):
+    output = tmp_path / f"out{len(list(tmp_path.iterdir()))}.json"
+    code, stdout, stderr = run_cli("noise", path, *arguments, "--classical-only", "--json", output)
+    assert code == 0, stderr
+    return json.loads(output.read_text()), stdout
+
+
+def _without_source(result):
+    return {key: value for key, value in result.items() if key != "source"}
+
+
+@pytest.mark.parametrize("kind", ["ros2", "db3", "mcap", "ros1"])
+def test_bag_reads_exactly_as_the_csv(run_cli, tmp_path, recordings, kind):
+    """Round trip: the gyro written into a bag gives the CSV's numbers, every one of them."""
+    bag = recordings["bags"][kind]
+    from_bag, stdout = _noise_json(run_cli, bag, tmp_path, "--channel", "gyro_x")
+    from_csv, _ = _noise_json(run_cli, recordings["csv"], tmp_path, "--channel", "gyro_x")
+    assert from_bag["source"] == f"{bag} [/imu]" and from_bag["unit"] == "rad/s"
+    assert from_bag["n_samples"] == N_SAMPLES and from_bag["rate_hz"] == RATE
+    assert _without_source(from_bag) == _without_source(from_csv)
+    assert "[/imu]" in stdout
+
+
+def test_bag_columns_units_and_times(recordings):
+    from bayescal._recording import load_table
+
+    table = load_table(recordings["bags"]["ros1"], topic="/imu")
+    assert table.topic == "/imu" and table.start_stamp_ns == START_NS
+    assert table.header_units["gyro_y"] == "rad/s" and table.header_units["acc_z"] == "m/s^2"
+    np.testing.assert_array_equal(table.columns["gyro_y"], recordings["gyro"][:, 1])
+    np.testing.assert_array_equal(table.columns["acc_z"], recordings["acc"][:, 2])
+    expected = np.arange(N_SAMPLES) / RATE
+    np.testing.assert_allclose(table.columns["time"], expected, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(table.columns["bag_time"], expected, rtol=0, atol=1e-12)
+
+
+def test_messages_of_varying_layout_read_through_rosbags(tmp_path):
+    """frame_ids of different lengths move the CDR offsets: the slow, exact path reads them."""
+    gyro, acc = _simulated_imu(seed=8)
+    gyro, acc = gyro[:64], acc[:64]
+    bag = write_bag(tmp_path / "odd", {"/imu": (gyro, acc)}, frame_ids=["a", "imu_link_12"])
+    from bayescal._rosbag import read_rosbag
+
+    table = read_rosbag(bag)
+    np.testing.assert_array_equal(table.columns["gyro_x"], gyro[:, 0])
+    np.testing.assert_array_equal(table.columns["acc_y"], acc[:, 1])
+
+
+def test_topic_choice_and_bad_bags(run_cli, tmp_path, recordings):
+    gyro, acc = recordings["gyro"][:256], recordings["acc"][:256]
+    two = write_bag(
+        tmp_path / "two", {"/imu": (gyro, acc), "/imu2": (gyro, acc)}, strings=["/status"]
+    )
+    code, _, stderr = run_cli("noise", two, "--channel", "gyro_x", "--classical-only")
+    assert code == 2 and "2 sensor_msgs/Imu topics: /imu, /imu2" in stderr
+    assert "--topic" in stderr
+    code, _, stderr = run_cli("noise", two, "--topic", "/nope", "--channel", "gyro_x")
+    assert code == 2 and "no topic '/nope'" in stderr and "IMU topics: /imu, /imu2" in stderr
+    code, _, stderr = run_cli("noise", two, "--topic", "/status", "--channel", "gyro_x")
+    assert code == 2 and "holds std_msgs/msg/String, not sensor_msgs/Imu" in stderr
+    code, stdout, stderr = run_cli(
+        "noise", two, "--topic", "/imu2", "--channel", "acc_z", "--classical-only"
+    )
+    assert code == 0, stderr
+    assert "[/imu2]" in stdout and "m/s^2" in stdout
+
+    no_imu = write_bag(tmp_path / "no_imu.bag", {}, kind="ros1", strings=["/status"])
+    code, stdout, stderr = run_cli("noise", no_imu, "--channel", "gyro_x")
+    assert code == 2 and stdout == ""
+    assert "no_imu.bag: the bag has no sensor_msgs/Imu topic" in stderr
+    assert "/status (std_msgs/msg/String)" in stderr
+
+    broken = tmp_path / "broken.bag"
+    broken.write_bytes(b"#ROSBAG V2.0\n" + b"\x00" * 40)
+    code, _, stderr = run_cli("noise", broken, "--channel", "gyro_x")
+    assert code == 2 and "broken.bag: cannot read it as a ROS bag" in stderr
+    assert "Traceback" not in stderr and "internal error" not in stderr
+
+    folder = tmp_path / "plain_folder"
+    folder.mkdir()
+    code, _, stderr = run_cli("noise", folder, "--channel", "gyro_x")
+    assert code == 2 and "not a ROS 2 bag: it has no metadata.yaml" in stderr
+
+    code, _, stderr = run_cli("noise", recordings["csv"], "--topic", "/imu", "--channel", "gyro_x")
+    assert code == 2 and "only a ROS bag has topics" in stderr
+
+
+def test_empty_header_stamps_need_another_clock(run_cli, tmp_path, recordings):
+    gyro, acc = recordings["gyro"][:512], recordings["acc"][:512]
+    bag = write_bag(tmp_path / "unstamped", {"/imu": (gyro, acc)}, zero_stamps=True)
+    code, _, stderr = run_cli("noise", bag, "--channel", "gyro_x", "--classical-only")
+    assert code == 2 and "no time column" in stderr and "bag_time" in stderr
+    result, _ = _noise_json(
+        run_cli, bag, tmp_path, "--channel", "gyro_x", "--time-column", "bag_time"
+    )
+    assert result["rate_hz"] == RATE
+
+
+def _classical_si(result, parameter, to_si):
+    reading = result["classical"]["slope_readings"][parameter]
+    value = reading["value"] if reading["kind"] == "reading" else reading["ci_high"]
+    return value * to_si
+
+
+def test_kalibr_yaml_fills_one_sensor_per_run(run_cli, tmp_path, recordings):
+    imu_yaml = tmp_path / "imu.yaml"
+    gyro_result, stdout = _noise_json(
+        run_cli,
+        recordings["bags"]["ros2"],
+        tmp_path,
+        "--channel",
+        "gyro_x",
+        "--export",
+        "kalibr",
+        imu_yaml,
+    )
+    assert f"wrote gyroscope noise of gyro_x to {imu_yaml} (kalibr)" in stdout
+    first = yaml.safe_load(imu_yaml.read_text())
+    assert "accelerometer_noise_density" not in first
+    assert "Accelerometers: not measured yet" in imu_yaml.read_text()
+
+    # The accelerometer from a CSV in g: converted to m/s^2, the gyro entries kept.
+    accel_result, stdout = _noise_json(
+        run_cli, recordings["csv"], tmp_path, "--channel", "acc_y", "--export", "kalibr", imu_yaml
+    )
+    assert "gyroscope entries kept from the existing file" in stdout
+    text = imu_yaml.read_text()
+    imu = yaml.safe_load(text)
+    kalibr_keys = {
+        "accelerometer_noise_density",
+        "accelerometer_random_walk",
+        "gyroscope_noise_density",
+        "gyroscope_random_walk",
+        "rostopic",
+        "update_rate",
+    }
+    assert kalibr_keys <= set(imu)
+    for key in kalibr_keys - {"rostopic"}:
+        assert isinstance(imu[key], float), (key, imu[key])
+    assert imu["gyroscope_noise_density"] == pytest.approx(
+        _classical_si(gyro_result, "N", 1.0), rel=1e-8
+    )
+    assert imu["gyroscope_random_walk"] == pytest.approx(
+        _classical_si(gyro_result, "K", 1.0), rel=1e-8
+    )
+    assert imu["accelerometer_noise_density"] == pytest.approx(
+        _classical_si(accel_result, "N", G), rel=1e-8
+    )
+    assert imu["accelerometer_random_walk"] == pytest.approx(
+        _classical_si(accel_result, "K", G), rel=1e-8
+    )
+    assert imu["rostopic"] == "/imu" and imu["update_rate"] == RATE
+    # Kalibr's conventions, said in the file.
+    assert "[rad/s/sqrt(Hz)]" in text and "[m/s^3/sqrt(Hz)]" in text
+    assert "rate random walk K" in text and "NOT the bias instability B" in text
+    kept_line = next(line for line in text.splitlines() if line.startswith("# Gyroscopes:"))
+    assert "kept from the file" in kept_line and "bias instability B = " in kept_line
+    assert "accelerometer bias instability B =" in text
+    assert "classical" in imu["bayescal"]["accelerometer"]
+
+
+def test_matlab_script_sets_the_imusensor_properties(run_cli, tmp_path, recordings):
+    script = tmp_path / "imu_params.m"
+    result, _ = _noise_json(
+        run_cli, recordings["csv"], tmp_path, "--channel", "gyro_z", "--export", "matlab", script
+    )
+    text = script.read_text()
+    assert text.startswith("% IMU noise parameters for MATLAB's imuSensor, written by bayescal")
+    assert "gyro = gyroparams;" in text and "accel = accelparams;" not in text
+    to_si = np.pi / 180  # the channel is in deg/s; MATLAB wants rad/s
+    for prop, parameter in (("NoiseDensity", "N"), ("BiasInstability", "B"), ("RandomWalk", "K")):
+        match = re.search(rf"^gyro\.{prop} = ([-+.\deE]+);", text, re.MULTILINE)
+        assert match, prop
+        assert float(match[1]) == pytest.approx(_classical_si(result, parameter, to_si), rel=1e-8)
+    assert "% gyro.TemperatureBias not set" in text
+    assert "gyro_sample_rate = 100.0;" in text
+
+    code, _, stderr = run_cli(
+        "noise",
+        recordings["bags"]["ros1"],
+        "--channel",
+        "acc_x",
+        "--classical-only",
+        "--export",
+        "matlab",
+        script,
+    )
+    assert code == 0, stderr
+    merged = script.read_text()
+    assert "accel = accelparams;" in merged and re.search(r"^accel\.RandomWalk = ", merged, re.M)
+    gyro_block = text[text.index("%% gyroscope:") : text.index("%% end of gyroscope")]
+    assert gyro_block in merged
+
+
+def test_posterior_means_are_exported_when_the_posterior_passed():
+    from bayescal._export import SensorNoise, estimates_from_result, kalibr_yaml, matlab_script
+
+    readings = {
+        "N": {"kind": "reading", "value": 2.0, "ci_low": 1.5, "ci_high": 2.5},
+        "B": {"kind": "upper_bound", "value": None, "ci_low": None, "ci_high": 3.0},
+        "K": {"kind": "upper_bound", "value": None, "ci_low": None, "ci_high": 5.0},
+    }
+    result = {
+        "classical": {"slope_readings": readings, "allan": {"confidence": 0.95}},
+        "bayesian": {
+            "interval": 0.9,
+            "diagnostics": {"passed": True},
+            "parameters": {
+                "N": {"mean": 2.1, "q05": 2.0, "q95": 2.2},
+                "K": {"mean": 0.4, "q05": 0.1, "q95": 0.8},
+            },
+        },
+    }
+    estimates = estimates_from_result(result, to_si=10.0)
+    assert estimates["N"].value == pytest.approx(21.0) and estimates["N"].how == "posterior mean"
+    assert estimates["K"].value == pytest.approx(4.0)
+    assert estimates["B"].value == pytest.approx(30.0) and "upper bound" in estimates["B"].how
+    noise = SensorNoise("gyroscope", "gyro_y", "x.bag [/imu]", 200.0, estimates)
+    text, kept = kalibr_yaml(noise, topic="/imu")
+    assert kept is None
+    imu = yaml.safe_load(text)
+    assert imu["gyroscope_noise_density"] == pytest.approx(21.0)
+    assert imu["gyroscope_random_walk"] == pytest.approx(4.0)
+    assert "posterior mean, 90% interval [2.000e+01, 2.200e+01]" in text
+    script, _ = matlab_script(
+        SensorNoise("accelerometer", "acc_z", "f.csv", 100.0, estimates, temperature_bias=1e-4)
+    )
+    assert "accel.TemperatureBias = 1.000000000e-04;" in script
+
+    result["bayesian"]["diagnostics"]["passed"] = False
+    fallback = estimates_from_result(result, to_si=1.0)
+    assert fallback["N"].value == 2.0 and "failed its health checks" in fallback["N"].how
+
+
+def test_export_refusals_leave_no_file(run_cli, tmp_path, recordings):
+    bag = recordings["bags"]["ros2"]
+
+    def refused(*arguments, fragments):
+        code, stdout, stderr = run_cli("noise", bag, "--channel", "gyro_x", *arguments)
+        assert code == 2, stderr
+        assert stdout == "" and "\n" not in stderr.strip()
+        for fragment in fragments:
+            assert fragment in stderr, stderr
+
+    missing = tmp_path / "no_such_folder" / "imu.yaml"
+    refused("--export", "kalibr", missing, fragments=["--export kalibr", "does not exist"])
+    assert not missing.parent.exists()
+    refused("--export", "rosparam", tmp_path / "x.yaml", fragments=["unknown format 'rosparam'"])
+    refused("--export", "kalibr", tmp_path, fragments=["is a folder"])
+    refused(
+        "--unit", "LSB", "--export", "matlab", tmp_path / "lsb.m", fragments=["'LSB'", "--unit"]
+    )
+    assert not (tmp_path / "lsb.m").exists() and not (tmp_path / "x.yaml").exists()
+
+    foreign = tmp_path / "other.yaml"
+    foreign.write_text("cam0:\n  intrinsics: [1, 2, 3, 4]\n")
+    refused("--export", "kalibr", foreign, fragments=["not a Kalibr imu.yaml", "cam0"])
+    assert foreign.read_text() == "cam0:\n  intrinsics: [1, 2, 3, 4]\n"
+    script = tmp_path / "mine.m"
+    script.write_text("x = 1;\n")
+    refused("--export", "matlab", script, fragments=["not written by bayescal"])
+    assert script.read_text() == "x = 1;\n"
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["mine.m", "other.yaml"]

@@ -1,0 +1,356 @@
+"""``bayescal report`` and ``bayescal demo``: the self-contained page, the JSON and netCDF
+behind it, the discovery section, and the page in a real browser (headless chromium)."""
+
+import base64
+import io
+import json
+import os
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+import xarray as xr
+
+RATE_HZ = 10.0
+N_SAMPLES = 2**13
+IMAGE = re.compile(r'<img[^>]*src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
+
+
+def _recording(path):
+    """A short two-channel recording: a gyro (white noise and a random walk) and an
+    accelerometer at 1 g, both simulated by bayescal's own model."""
+    import jax
+
+    from bayescal._noise_model import NoiseModel
+
+    gyro = NoiseModel(rate_hz=RATE_HZ, bias=0.2, N=0.02, K=1e-3)
+    accel = NoiseModel(rate_hz=RATE_HZ, bias=9.81, N=0.004, K=2e-4)
+    keys = jax.random.split(jax.random.PRNGKey(5), 2)
+    columns = {
+        "time": np.arange(N_SAMPLES) / RATE_HZ,
+        "gyro_x[deg/s]": np.asarray(gyro.simulate(keys[0], N_SAMPLES)),
+        "acc_z[m/s^2]": np.asarray(accel.simulate(keys[1], N_SAMPLES)),
+    }
+    lines = [",".join(columns)]
+    lines += [",".join(repr(float(v)) for v in row) for row in zip(*columns.values(), strict=True)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _findings(channel="gyro_x", unit_scale=1.0):
+    """A hand-made discovery result: the issue-6 JSON contract plus the diagnostics blocks."""
+    rng = np.random.default_rng(3)
+    tau = np.geomspace(0.1, 200, 12)
+    adev = 0.02 / np.sqrt(tau) + 0.002 * tau / 200
+    frequency = np.geomspace(1e-3, 5, 300)
+    power = 4e-4 * (1 + 1e-4 / frequency**2) * rng.exponential(size=frequency.size)
+    time = np.arange(4000) / RATE_HZ
+    drift = 0.01 * (1 - np.exp(-time / 60))
+    return {
+        "channel": channel,
+        "baseline": ["bias", "white"],
+        "effects": [
+            {
+                "name": "thermal_bias",
+                "explanation": "The bias follows the die temperature as it warms up.",
+                "location": {"start_s": 0.0, "stop_s": 400.0, "covariate": "temperature"},
+                "evidence": {"correlation": 0.93, "p_value": 1e-6},
+                "delta_elpd": 812.4,
+                "delta_elpd_se": 40.2,
+                "parameters": {
+                    "c1": {"mean": 0.002, "q05": 0.0018, "q95": 0.0022, "unit": "deg/s/degC"}
+                },
+            }
+        ],
+        "final_terms": ["bias", "white", "thermal_bias"],
+        "checks": [
+            {
+                "name": "allan_deviation",
+                "statistic": 4.2,
+                "p_value": 0.001,
+                "location": {"tau_s": [50.0, 200.0]},
+                "passed_after": True,
+            },
+            {
+                "name": "residual_vs_temperature",
+                "statistic": 0.93,
+                "p_value": 1e-5,
+                "location": {"covariate": "temperature"},
+                "passed_after": True,
+            },
+        ],
+        "diagnostics": {
+            "allan": {
+                "tau_s": tau.tolist(),
+                "adev": (adev * unit_scale).tolist(),
+                "baseline_low": (0.8 * 0.02 / np.sqrt(tau)).tolist(),
+                "baseline_high": (1.2 * 0.02 / np.sqrt(tau)).tolist(),
+                "final_low": (0.8 * adev).tolist(),
+                "final_high": (1.2 * adev).tolist(),
+            },
+            "spectrum": {
+                "frequency_hz": frequency.tolist(),
+                "power": power.tolist(),
+                "baseline_model": np.full(frequency.size, 4e-4).tolist(),
+                "final_model": (4e-4 * (1 + 1e-4 / frequency**2)).tolist(),
+            },
+            "residual": {
+                "time_s": time.tolist(),
+                "baseline": (drift + 0.02 * rng.standard_normal(time.size)).tolist(),
+                "final": (0.02 * rng.standard_normal(time.size)).tolist(),
+            },
+        },
+    }
+
+
+def _decoded_images(page: str) -> list[np.ndarray]:
+    from matplotlib.image import imread
+
+    found = IMAGE.findall(page)
+    return [imread(io.BytesIO(base64.b64decode(data)), format="png") for data in found]
+
+
+def _assert_not_blank(image: np.ndarray) -> None:
+    assert image.ndim == 3 and image.shape[0] > 100 and image.shape[1] > 100
+    gray = image[..., :3].mean(axis=-1)
+    assert gray.std() > 0.03, "figure is (nearly) uniform"
+    assert np.mean(gray < 0.9) > 0.01, "figure has almost nothing drawn on it"
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    """A report of the two channels, with a sensor card and a hand-made discovery."""
+    from bayescal._recording import load_table
+    from bayescal._report_command import report_recording
+
+    folder = tmp_path_factory.mktemp("report")
+    csv = _recording(folder / "bench.csv")
+    outcome = report_recording(
+        load_table(csv),
+        ["gyro_x", "acc_z"],
+        folder / "out",
+        stem="bench",
+        sensor="MPU-6050",
+        terms="white,rrw",
+        seed=1,
+        discoveries={"gyro_x": _findings()},
+    )
+    return outcome, csv
+
+
+def test_report_files_and_json(report):
+    outcome, _ = report
+    assert outcome.passed, [a.fit.diagnostics.failures for a in outcome.failed]
+    folder = outcome.html.parent
+    assert outcome.html.name == "bench_report.html" and outcome.html.stat().st_size > 50_000
+    document = json.loads(outcome.json.read_text())
+    assert document["schema"] == "bayescal.report" and document["passed"] is True
+    assert set(document["channels"]) == {"gyro_x", "acc_z"}
+    gyro = document["channels"]["gyro_x"]
+    assert gyro["unit"] == "deg/s" and set(gyro["bayesian"]["parameters"]) == {"bias", "N", "K"}
+    assert gyro["figures"]["allan"]["unit"] == "deg/s"
+    assert gyro["datasheet"]["card"] == "MPU-6050"
+    assert document["channels"]["acc_z"]["datasheet"]["parameters"]["N"]["unit"] == (
+        "m/s^2/sqrt(Hz)"
+    )
+    assert document["discoveries"]["gyro_x"]["effects"][0]["name"] == "thermal_bias"
+    for channel in ("gyro_x", "acc_z"):
+        path = folder / f"bench_{channel}_posterior.nc"
+        tree = xr.open_datatree(path, engine="h5netcdf")
+        assert "posterior" in tree.children
+        mean = float(tree["posterior"]["N"].mean())
+        assert mean == pytest.approx(
+            document["channels"][channel]["bayesian"]["parameters"]["N"]["mean"], rel=1e-9
+        )
+
+
+def test_page_content_and_units(report):
+    outcome, _ = report
+    page = outcome.html.read_text()
+    assert page.startswith("<!DOCTYPE html>") and page.rstrip().endswith("</html>")
+    # Self-contained: no resource fetched from anywhere.
+    assert not re.search(r'(src|href)="(https?:|//)', page)
+    for text in (
+        "Summary",
+        "Posterior health checks",
+        "Student-t interval of the bias",
+        "deg/s/√Hz",
+        "m/s²/√Hz",
+        "deg/√h",
+        "Against the datasheet: MPU-6050",
+        "Discovery: gyro_x",
+        "thermal_bias",
+        "812.4 ± 40.2&nbsp;nats",
+        "deg/s/°C",
+    ):
+        assert text in page, text
+    assert "HEALTH CHECK FAILED" not in page
+    # 3 figures per channel, 3 before/after figures of the discovery.
+    images = _decoded_images(page)
+    assert len(images) == 2 * 3 + 3
+    for image in images:
+        _assert_not_blank(image)
+
+
+def test_posterior_bands_agree_with_the_data(report):
+    """The predictive band of the Allan deviation covers most measured points, and the model
+    spectrum's white level reads N."""
+    outcome, _ = report
+    for analysis in outcome.analyses:
+        band = analysis.bands["allan"]
+        allan = analysis.classical.allan
+        measured = np.asarray(allan.deviation)[np.isfinite(allan.deviation)]
+        inside = (band["predictive_low"] <= measured) & (measured <= band["predictive_high"])
+        assert inside.mean() >= 0.7, (analysis.channel, inside)
+        assert np.all(band["expected_low"] <= band["expected_high"])
+        spectrum = analysis.bands["spectrum"]
+        high = spectrum["frequency_hz"] > 1.0
+        n_mean = analysis.fit.parameters["N"].mean
+        assert np.median(spectrum["expected_median"][high]) == pytest.approx(n_mean, rel=0.05)
+        assert np.median(spectrum["measured_asd"][high]) == pytest.approx(n_mean, rel=0.1)
+
+
+def test_discovery_section_alone():
+    from bayescal._report import discovery_section
+
+    section = discovery_section(_findings(), unit="deg/s")
+    assert "thermal_bias" in section and "passes" in section and "deg/s/°C" in section
+    images = _decoded_images(section)
+    assert len(images) == 3
+    for image in images:
+        _assert_not_blank(image)
+    # Every key may be missing; nothing found is said so.
+    empty = discovery_section({"channel": "gyro_y", "effects": [], "checks": []})
+    assert "No effect found" in empty and "<img" not in empty
+    partial = discovery_section({"diagnostics": {"allan": {"tau_s": [1.0, 2.0, 4.0]}}})
+    assert "<img" not in partial
+
+
+def test_report_command_line(run_cli, report, tmp_path):
+    _, csv = report
+    out = tmp_path / "cli"
+    code, stdout, stderr = run_cli(
+        "report", csv, "--channels", "gyro_x", "--out", out, "--terms", "white,rrw",
+        "--sensor", "MPU-6050", "--quiet",
+    )  # fmt: skip
+    assert code == 0, stderr
+    assert (out / "bench_report.html").is_file() and (out / "bench_report.json").is_file()
+    assert (out / "bench_gyro_x_posterior.nc").is_file()
+    assert f"report: {out / 'bench_report.html'}" in stdout and "gyro_x" in stdout
+    assert "channel/s" not in stderr  # no progress bar when stderr is not a terminal
+
+
+def test_report_failed_health_check_is_loud(run_cli, report, tmp_path):
+    _, csv = report
+    out = tmp_path / "failed"
+    code, _, stderr = run_cli(
+        "report", csv, "--channels", "gyro_x", "--out", out, "--terms", "white,rrw",
+        "--sensor", "MPU-6050", "--max-steps", "250",
+    )  # fmt: skip
+    assert code == 1 and "HEALTH CHECK FAILED" in stderr
+    page = (out / "bench_report.html").read_text()
+    assert "HEALTH CHECK FAILED" in page and "POSTERIOR CHECKS FAILED" in page
+    assert "autocorrelation-time criterion not met" in page
+
+
+def test_report_bad_input_exit_2(run_cli, report, tmp_path):
+    _, csv = report
+    code, _, stderr = run_cli("report", csv, "--channels", "gyro_q", "--out", tmp_path / "x")
+    assert code == 2 and "gyro_q" in stderr
+    code, _, stderr = run_cli(
+        "report", csv, "--channels", "gyro_x", "--sensor", "nope", "--out", tmp_path / "y"
+    )
+    assert code == 2 and "no such sensor card" in stderr
+
+
+def _chromium() -> str:
+    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
+        path = shutil.which(name)
+        if path:
+            return path
+    if os.environ.get("CI", "").lower() == "true":
+        pytest.fail("chromium is not installed (.ci/run installs Debian's chromium)")
+    pytest.skip("chromium not installed (apt-get install chromium); CI installs it")
+
+
+_CHECKER = """<script>
+window.addEventListener("load", function () {
+  var images = Array.from(document.images);
+  var decoded = images.filter(function (img) { return img.complete && img.naturalWidth > 0; });
+  var marker = document.createElement("div");
+  marker.id = "bayescal-image-check";
+  marker.textContent = "images " + decoded.length + "/" + images.length;
+  document.body.appendChild(marker);
+});
+</script>"""
+
+
+def _browser(binary, profile, *arguments):
+    command = [
+        binary,
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--disable-dev-shm-usage",
+        f"--user-data-dir={profile}",
+        *arguments,
+    ]
+    return subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
+
+
+def test_page_renders_in_a_browser(report, tmp_path):
+    from matplotlib.image import imread
+
+    binary = _chromium()
+    outcome, _ = report
+    page = outcome.html.read_text()
+    checked = tmp_path / "checked.html"
+    checked.write_text(page.replace("</body>", _CHECKER + "</body>"))
+    result = _browser(
+        binary, tmp_path / "profile", "--virtual-time-budget=10000", "--dump-dom",
+        checked.as_uri(),
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr[-2000:]
+    match = re.search(r'id="bayescal-image-check">images (\d+)/(\d+)<', result.stdout)
+    assert match, "the page's load handler did not run: " + result.stderr[-2000:]
+    decoded, total = int(match[1]), int(match[2])
+    assert total == len(IMAGE.findall(page)) and total > 0
+    assert decoded == total, f"only {decoded} of {total} figures decoded in the browser"
+    assert "Posterior health checks" in result.stdout
+
+    screenshot = tmp_path / "page.png"
+    result = _browser(
+        binary, tmp_path / "profile", f"--screenshot={screenshot}", "--window-size=1280,2000",
+        outcome.html.as_uri(),
+    )  # fmt: skip
+    assert result.returncode == 0 and screenshot.is_file(), result.stderr[-2000:]
+    _assert_not_blank(imread(screenshot))
+
+
+def test_demo_writes_the_page(run_cli, tmp_path):
+    """The demo's whole chain (shortened recording: the default 25 minutes is the same code
+    with more samples)."""
+    out = tmp_path / "demo"
+    code, stdout, stderr = run_cli("demo", "--out", out, "--minutes", "5", "--quiet")
+    assert code == 0, stderr
+    page = out / "demo_imu_report.html"
+    assert page.is_file() and f"report: {page}" in stdout
+    assert (out / "demo_imu.csv").is_file() and (out / "demo_truth.json").is_file()
+    header = (out / "demo_imu.csv").read_text().split("\n", 1)[0]
+    for column in ("gyro_x[deg/s]", "gyro_z[deg/s]", "acc_z[m/s^2]", "temperature[degC]"):
+        assert column in header
+    truth = json.loads((out / "demo_truth.json").read_text())
+    assert truth["hidden_effect"]["name"] == "thermal_bias"
+    text = page.read_text()
+    assert "Against the datasheet: MPU-6050" in text
+    assert len(IMAGE.findall(text)) == 6 * 3
+    document = json.loads((out / "demo_imu_report.json").read_text())
+    acc_z = document["channels"]["acc_z"]["bayesian"]["parameters"]["bias"]
+    assert acc_z["q05"] < 9.80665 + 0.09 < acc_z["q95"]

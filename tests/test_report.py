@@ -350,7 +350,8 @@ def test_demo_writes_the_page(run_cli, tmp_path):
     assert truth["hidden_effect"]["name"] == "thermal_bias"
     text = page.read_text()
     assert "Against the datasheet: MPU-6050" in text
-    assert len(IMAGE.findall(text)) == 6 * 3
+    # Three figures per channel, and discovery's three before/after figures per gyro.
+    assert len(IMAGE.findall(text)) == 6 * 3 + 3 * 3
     document = json.loads((out / "demo_imu_report.json").read_text())
     acc_z = document["channels"]["acc_z"]["bayesian"]["parameters"]["bias"]
     assert acc_z["q05"] < 9.80665 + 0.09 < acc_z["q95"]

@@ -70,7 +70,7 @@ def test_expected_periodogram_is_the_average_periodogram():
     centred = increments - (increments @ taper / taper.sum())[:, None]
     periodogram = np.abs(fft.rfft(taper * centred, axis=1)) ** 2 / np.sum(taper**2)
     index = np.arange(1, 40)
-    basis = _expected_periodogram(taper, RATE, index)
+    basis = _expected_periodogram(taper.size, RATE, TAPER_FRACTION, tuple(index.tolist()))
     expected = np.asarray(component_weights(N=0.01, B=2e-3, K=1e-3, F=0.3)) @ basis
     mean = periodogram[:, index].mean(axis=0)
     standard_error = periodogram[:, index].std(axis=0) / np.sqrt(replicas)

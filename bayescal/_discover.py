@@ -43,7 +43,7 @@ from scipy.signal import windows
 from ._allan import allan_deviation
 from ._edf import equivalent_degrees_of_freedom
 from ._level import block_covariance_basis
-from ._mcmc import diagnose, sample_ensemble, walker_count
+from ._mcmc import diagnose, sample_ensemble, summarize, walker_count
 from ._noise_fit import allan_reference_scales
 from ._noise_model import SPECTRAL_COMPONENTS, NoiseModel, component_weights
 from ._units import noise_parameter_unit
@@ -324,7 +324,6 @@ class ModelFit(eqx.Module):
     """log-likelihood - (continuous parameters / 2) log(frequencies) - log(values searched):
     differences of it approximate log Bayes factors."""
     converged: bool
-    regressors: np.ndarray
     residual: np.ndarray
     """The data minus the fitted deterministic terms (bias and noise left)."""
     clean: np.ndarray
@@ -404,18 +403,17 @@ class _Context(eqx.Module):
     prior_scales: dict
     n_frequencies: int
     clean: np.ndarray
-    outlier_mask: np.ndarray
     summaries: dict
     """Spectral summaries already computed, by the parts of a spec they depend on, and the
     time constants found by earlier searches."""
 
 
-def _context(data: DiscoveryData, clean: np.ndarray, outlier_mask: np.ndarray) -> _Context:
+def _context(data: DiscoveryData, clean: np.ndarray) -> _Context:
     allan = allan_deviation(clean, data.rate_hz, "octave")
     scales = allan_reference_scales(allan)
     scales["G"] = float(np.nanmax(allan.deviation)) * 2.0
     half = np.count_nonzero(np.isfinite(clean)) // 2
-    return _Context(data, scales, half, clean, outlier_mask, {})
+    return _Context(data, scales, half, clean, {})
 
 
 def _slow_columns(spec: ModelSpec) -> np.ndarray:
@@ -560,7 +558,6 @@ def fit_model(context: _Context, spec: ModelSpec) -> ModelFit:
         n_parameters=n_parameters,
         schwarz=schwarz,
         converged=bool(converged),
-        regressors=regressors[:, :n_regressors],
         residual=values - fitted,
         clean=values,
         design=design,
@@ -1113,7 +1110,7 @@ def discover(
     outliers = outlier_scan(data.values)
     accept_outliers = outliers["log_bayes_factor"] > DECISIVE_LOG_BAYES_FACTOR
     clean = _without_outliers(data.values, outliers["flagged"]) if accept_outliers else data.values
-    context = _context(data, clean, outliers["flagged"])
+    context = _context(data, clean)
     report("fitting the baseline")
     current = fit_model(context, ModelSpec(noise=tuple(baseline)))
     baseline_fit = current
@@ -1264,16 +1261,6 @@ def sample_final(fit: ModelFit, data: DiscoveryData, *, seed: int = 0) -> FinalP
         draws[f"sinusoid{index}_amplitude"] = np.hypot(sine, cosine)
         units[f"sinusoid{index}_amplitude"] = data.unit
     return FinalPosterior(draws, units, diagnostics)
-
-
-def summarize(draws: np.ndarray, unit: str) -> dict:
-    return {
-        "mean": float(np.mean(draws)),
-        "sd": float(np.std(draws, ddof=1)),
-        "q05": float(np.quantile(draws, 0.05)),
-        "q95": float(np.quantile(draws, 0.95)),
-        "unit": unit,
-    }
 
 
 def _profile_interval(search: dict, key: str) -> dict:

@@ -126,6 +126,7 @@ def _check_json(check: dict, after: dict | None) -> dict:
 def discovery_result(result, posterior, *, baseline_terms, source: str, sim: dict | None) -> dict:
     """The JSON document (the contract of the discovery issue, with more keys)."""
     from ._discover import EXPLANATIONS, effect_parameters
+    from ._mcmc import summarize
     from ._output import to_jsonable
 
     after = {check["name"]: check for check in result.final_checks}
@@ -181,7 +182,7 @@ def discovery_result(result, posterior, *, baseline_terms, source: str, sim: dic
     if posterior is not None:
         document["posterior"] = {
             "parameters": {
-                name: _summary(values, posterior.units[name])
+                name: summarize(values, posterior.units[name])
                 for name, values in posterior.draws.items()
             },
             "health": posterior.diagnostics.as_dict(),
@@ -192,12 +193,6 @@ def discovery_result(result, posterior, *, baseline_terms, source: str, sim: dic
 
     document["diagnostics"] = diagnostics(result)
     return to_jsonable(document)
-
-
-def _summary(values, unit):
-    from ._discover import summarize
-
-    return summarize(values, unit)
 
 
 def _location(finding, result) -> dict:

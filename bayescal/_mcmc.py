@@ -155,3 +155,19 @@ def diagnose(sampler, names, converged: bool, map_converged: bool):
         map_converged=map_converged,
     )
     return diagnostics, by_walker[:, kept.astype(int)]
+
+
+def summarize(draws, unit: str, map_value: float | None = None, map_sd: float | None = None):
+    """Mean, sd, 5 % and 95 % quantiles of posterior draws (any shape), with the unit, and the
+    MAP with its Laplace sd when given: the layout of every ``parameters`` block in the JSON."""
+    draws = np.ravel(draws)
+    summary = {
+        "mean": float(draws.mean()),
+        "sd": float(draws.std(ddof=1)),
+        "q05": float(np.quantile(draws, 0.05)),
+        "q95": float(np.quantile(draws, 0.95)),
+    }
+    if map_value is not None:
+        summary.update(map=map_value, map_sd=map_sd)
+    summary["unit"] = unit
+    return summary

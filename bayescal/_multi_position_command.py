@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ._errors import InputError
+from ._mcmc import summarize
 from ._sections import MIN_DURATION_S
 from ._units import parse_unit
 
@@ -99,19 +100,6 @@ def parameter_units(names, unit: str) -> dict:
         else:
             units[name] = "rad"
     return units
-
-
-def _summary(draws: np.ndarray, map_value: float, map_sd: float, unit: str) -> dict:
-    draws = np.ravel(draws)
-    return {
-        "mean": float(draws.mean()),
-        "sd": float(draws.std(ddof=1)),
-        "q05": float(np.quantile(draws, 0.05)),
-        "q95": float(np.quantile(draws, 0.95)),
-        "map": map_value,
-        "map_sd": map_sd,
-        "unit": unit,
-    }
 
 
 def multi_position_result(
@@ -226,8 +214,8 @@ def multi_position_result(
     }
     if bayesian is not None:
         parameters = {
-            name: _summary(
-                bayesian.draws[name], bayesian.map_values[name], bayesian.map_sd[name], units[name]
+            name: summarize(
+                bayesian.draws[name], units[name], bayesian.map_values[name], bayesian.map_sd[name]
             )
             for name in bayesian.names
         }

@@ -7,6 +7,7 @@ import numpy as np
 
 from ._errors import InputError
 from ._gravity import LocalGravity
+from ._mcmc import summarize
 from ._recording import ChannelData
 from ._sections import find_static_sections
 from ._two_position import BayesianTwoPosition, Section
@@ -77,19 +78,6 @@ def _entry(value, uncertainty, unit):
     return {"value": value, "uncertainty": uncertainty, "unit": unit}
 
 
-def _summary(draws: np.ndarray, map_value: float, map_sd: float, unit: str) -> dict:
-    draws = np.ravel(draws)
-    return {
-        "mean": float(draws.mean()),
-        "sd": float(draws.std(ddof=1)),
-        "q05": float(np.quantile(draws, 0.05)),
-        "q95": float(np.quantile(draws, 0.95)),
-        "map": map_value,
-        "map_sd": map_sd,
-        "unit": unit,
-    }
-
-
 def two_position_result(
     channel: str,
     unit: str,
@@ -153,7 +141,7 @@ def two_position_result(
         draws, values, spread = bayesian.draws, bayesian.map_values, bayesian.map_sd
         units = {"scale": scale_unit, "offset": unit, "g_local": "m/s^2"}
         parameters = {
-            name: _summary(draws[name], values[name], spread[name], units[name])
+            name: summarize(draws[name], units[name], values[name], spread[name])
             for name in ("scale", "offset", "g_local")
         }
         noise = bayesian.noise

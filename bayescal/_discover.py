@@ -6,7 +6,10 @@ The loop (documented for users in the README, section "Discovery"):
 1. fit the current model — bias, noise terms and deterministic terms — by its Whittle
    likelihood (:mod:`bayescal._whittle`): the periodogram of the increments of the data minus
    the deterministic terms, with the noise terms' exact expected periodogram. Deterministic
-   coefficients are profiled out exactly (the likelihood is quadratic in them);
+   coefficients are profiled out exactly (the likelihood is quadratic in them); the slow ones
+   are then taken from the block means (:func:`level_coefficients`). The model's score counts
+   each frequency once: the exact Gaussian likelihood of 128 block means up to their Nyquist
+   frequency, the Whittle bins above it;
 2. run the checks (:func:`run_checks`): Allan deviation against the model, the spectrum in
    octave bands and its largest line, residual block means over time, against the temperature
    and against the accelerometers, tails, discrete levels, time stamps. Each gives a
@@ -18,8 +21,8 @@ The loop (documented for users in the README, section "Discovery"):
    prior over the values searched: it pays the log of their number, a lower bound of the
    Bayes factor's cost. The term with the largest log Bayes factor is accepted when that exceeds
    log(100) — "decisive" on Jeffreys' scale; its expected log predictive density gain
-   (pointwise over independent frequency bins, AIC-penalised) and the standard error of that
-   gain are reported beside it;
+   (pointwise over independent frequency bins and one-block-ahead predictions of the block
+   means, AIC-penalised) and the standard error of that gain are reported beside it;
 4. repeat until every check passes (nothing is left to explain) or no term is decisive, and
    report which located mismatches are gone.
 
@@ -89,6 +92,9 @@ MAX_COVARIATES = 3
 MAX_THERMAL_DEGREE = 3
 MAX_REGRESSORS = MAX_THERMAL_DEGREE + 1 + 2 * MAX_SINUSOIDS + MAX_COVARIATES
 DECISIVE_LOG_BAYES_FACTOR = math.log(100.0)
+AMBIGUOUS_LOG_BAYES_FACTOR = math.log(10.0)
+"""A runner-up closer than this to the accepted term explains the mismatch about as well:
+the two are reported as indistinguishable on this recording."""
 """Jeffreys' "decisive": odds of 100 to 1."""
 UNMODELLED_CHECKS = ("timestamps",)
 """Checks no model term answers: they are reported, but do not start a search."""
@@ -96,6 +102,10 @@ CHECK_LEVEL = 0.01
 """A check fails when its (Bonferroni-corrected) p-value is below this."""
 TIME_BLOCKS = 32
 GRID_POINTS = 6
+PARABOLIC_STEPS = 3
+"""Refinements of a searched time constant by a parabola through the best score and its two
+neighbours (in log time constant), after the grid and its midpoints."""
+SEARCHED_VALUES = 2 * GRID_POINTS - 1 + PARABOLIC_STEPS
 PRIOR_LOG_SD = 4.0
 LEVEL_BLOCKS = 128
 """Block means for the coefficients of slow deterministic terms (see :func:`fit_model`)."""
@@ -168,7 +178,7 @@ class ModelSpec(eqx.Module):
         them, the marginal likelihood is at least the best one's divided by that number, so
         the log Bayes factor is at least the best fit's minus this."""
         time_constants = (self.gauss_markov_s > 0) + (self.warmup_s > 0)
-        return time_constants * math.log(2 * GRID_POINTS - 1) + len(self.sinusoid_hz) * math.log(
+        return time_constants * math.log(SEARCHED_VALUES) + len(self.sinusoid_hz) * math.log(
             n_frequencies
         )
 
@@ -317,7 +327,8 @@ class ModelFit(eqx.Module):
     beta: np.ndarray
     beta_covariance: np.ndarray
     pointwise: np.ndarray
-    """Whittle log-likelihood per frequency bin, then per segment mean, at the MAP."""
+    """Log-likelihood at the MAP, pointwise: the Whittle bins above the block means' band,
+    then the one-block-ahead predictive density of each block mean."""
     log_likelihood: float
     n_parameters: int
     schwarz: float
@@ -444,16 +455,24 @@ def _level_design(values, regressors, rate_hz: float):
     edges = np.linspace(0, values.size, LEVEL_BLOCKS + 1).round().astype(np.int64)
     start, stop = edges[:-1], edges[1:]
     means = _block_means(values, start, stop)
-    columns = np.stack([_block_means(column, start, stop) for column in regressors.T], axis=1)
+    columns = np.array([_block_means(column, start, stop) for column in regressors.T]).T.reshape(
+        LEVEL_BLOCKS, regressors.shape[1]
+    )
     return means, columns, start, stop
 
 
 def level_coefficients(fit_like, values, regressors, rate_hz, theta):
-    """GLS coefficients (and covariance) of ``regressors`` from the block means of the data
-    under the noise at ``theta`` (one set of coordinates, or a batch), the bias and the ramp
-    taken out. The increments' likelihood discards the ends of the record with its taper,
-    where a warm-up or a temperature step hold most of their information; the block means
-    keep it."""
+    """GLS coefficients of ``regressors`` from the block means of the data under the noise at
+    ``theta`` (one set of coordinates, or a batch), the bias taken out and the ramp removed;
+    their covariance; and the one-block-ahead log predictive density of each block mean.
+
+    The increments' likelihood discards the ends of the record with its taper, where a
+    warm-up or a temperature step hold most of their information, and it cannot see the
+    level of the signal, which is what tells a Gauss-Markov term (bounded) from a random walk
+    (not); the block means keep both. With the coefficients at their GLS values the
+    Cholesky-whitened residuals are the standardised one-step-ahead prediction errors, so the
+    exact Gaussian log-likelihood of the block means splits into one predictive density per
+    block."""
     means, columns, start, stop = _level_design(values, regressors, rate_hz)
     time = (start + stop) / 2 / rate_hz
     theta = np.atleast_2d(theta)
@@ -473,7 +492,16 @@ def level_coefficients(fit_like, values, regressors, rate_hz, theta):
     right = np.einsum("dip,di->dp", white_design, white_target)
     coefficient_covariance = np.linalg.inv(normal)
     coefficients = np.einsum("dpq,dq->dp", coefficient_covariance, right)
-    return coefficients[:, 1:], coefficient_covariance[:, 1:, 1:]
+    errors = white_target - np.einsum("dip,dp->di", white_design, coefficients)
+    log_scale = np.log(np.diagonal(factor, axis1=-2, axis2=-1))
+    predictive = -0.5 * (errors**2 + math.log(2 * math.pi)) - log_scale
+    return coefficients[:, 1:], coefficient_covariance[:, 1:, 1:], predictive
+
+
+def _above_level_band(summary, duration_s: float) -> np.ndarray:
+    """The Whittle bins above the band the block means already cover (up to their Nyquist
+    frequency), so that no frequency is counted twice in a model's likelihood."""
+    return summary.frequency_hz > LEVEL_BLOCKS / (2 * duration_s)
 
 
 class _LevelNoise(eqx.Module):
@@ -485,7 +513,9 @@ class _LevelNoise(eqx.Module):
 def fit_model(context: _Context, spec: ModelSpec) -> ModelFit:
     """MAP fit of ``spec``: the noise by the Whittle likelihood of the increments with the
     regression profiled exactly; then the coefficients of the slow deterministic terms (all
-    but sinusoids) by GLS on block means under that noise (:func:`level_coefficients`)."""
+    but sinusoids) by GLS on block means under that noise (:func:`level_coefficients`). The
+    score (log-likelihood, Schwarz) takes the block means' exact likelihood for the band they
+    cover and the Whittle bins above it, so that no frequency is counted twice."""
     data = context.data
     values = context.clean if spec.outliers else data.values
     regressors, _ = regressor_columns(spec, data)
@@ -525,19 +555,26 @@ def fit_model(context: _Context, spec: ModelSpec) -> ModelFit:
     beta = np.array(beta)
     covariance = np.linalg.inv(np.asarray(precision))
     slow = _slow_columns(spec)
+    fast = np.setdiff1d(np.arange(n_regressors), slow)
+    level_beta, level_covariance, level_pointwise = level_coefficients(
+        _LevelNoise(mask, design.ramp_scale, spec.gauss_markov_s),
+        values - regressors[:, fast] @ beta[fast],
+        regressors[:, slow],
+        data.rate_hz,
+        np.asarray(theta),
+    )
     if slow.size:
-        level_beta, level_covariance = level_coefficients(
-            _LevelNoise(mask, design.ramp_scale, spec.gauss_markov_s),
-            values,
-            regressors[:, slow],
-            data.rate_hz,
-            np.asarray(theta),
-        )
         beta[slow] = level_beta[0]
         covariance[np.ix_(slow, slow)] = level_covariance[0]
         pointwise = whittle_log_likelihood(
             summary, *_variances(jnp.asarray(theta), mask, design.ramp_scale), beta
         )
+    pointwise = np.concatenate(
+        (
+            np.asarray(pointwise)[: summary.n_bins][_above_level_band(summary, data.duration_s)],
+            level_pointwise[0],
+        )
+    )
     n_parameters = int(mask.sum()) + n_regressors + spec.searched()
     log_likelihood = float(np.sum(pointwise))
     # Schwarz for the continuous parameters; the searched ones pay log(number searched).
@@ -946,9 +983,12 @@ def _time_grid(data: DiscoveryData) -> np.ndarray:
 
 
 def _search_time(context, make_spec, key: str) -> tuple[ModelFit, dict]:
-    """The best fit over a log grid of time constants, refined once around the best point;
-    the profile (time constant, Schwarz score) is returned for the interval. A later step
-    searches only around the time constant the previous step found for the same term."""
+    """The best fit over a log grid of time constants, refined around the best point by the
+    midpoints to its neighbours and then by parabolic steps in log time constant (a
+    deterministic term with a time constant off by a third leaves a residual that a noise
+    term would take up); the profile (time constant, Schwarz score) is returned for the
+    interval. A later step searches only around the time constant the previous step found
+    for the same term."""
     previous = context.summaries.get(("best time", key))
     if previous is None:
         grid = list(_time_grid(context.data))
@@ -961,10 +1001,42 @@ def _search_time(context, make_spec, key: str) -> tuple[ModelFit, dict]:
         if 0 <= neighbour < len(grid):
             middle = math.sqrt(best * grid[neighbour])
             fits[middle] = fit_model(context, make_spec(float(middle)))
+    for _ in range(PARABOLIC_STEPS):
+        times = sorted(fits)
+        position = max(range(len(times)), key=lambda i: fits[times[i]].schwarz)
+        if not 0 < position < len(times) - 1:
+            break
+        step = _parabola_vertex(
+            np.log(times[position - 1 : position + 2]),
+            [fits[t].schwarz for t in times[position - 1 : position + 2]],
+        )
+        vertex = float(np.exp(step))
+        if min(abs(step - math.log(t)) for t in times) < 0.02:
+            break
+        fits[vertex] = fit_model(context, make_spec(vertex))
     times = sorted(fits)
     winner = max(times, key=lambda t: fits[t].schwarz)
     context.summaries[("best time", key)] = winner
-    return fits[winner], {"time_constant_s": times, "score": [fits[t].schwarz for t in times]}
+    return fits[winner], {
+        "time_constant_s": times,
+        "score": [fits[t].schwarz for t in times],
+        "estimates": [
+            {
+                **dict(zip(fits[t].spec.regressor_names(), fits[t].beta, strict=True)),
+                "sigma_gm": fits[t].noise["G"],
+            }
+            for t in times
+        ],
+    }
+
+
+def _parabola_vertex(x, y) -> float:
+    """Abscissa of the vertex of the parabola through three points, the middle one highest
+    (so the vertex lies between the outer two)."""
+    (x0, x1, x2), (y0, y1, y2) = x, y
+    numerator = (x1 - x0) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y1 - y0)
+    denominator = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0)
+    return float(x1 - 0.5 * numerator / denominator) if denominator else float(x1)
 
 
 def candidate_fits(context: _Context, current: ModelFit) -> dict[str, tuple[ModelFit, dict]]:
@@ -1063,7 +1135,8 @@ def _without_outliers(values: np.ndarray, flagged: np.ndarray) -> np.ndarray:
 
 
 def _elpd_difference(new: ModelFit, old: ModelFit) -> tuple[float, float]:
-    """AIC-penalised ELPD gain and its standard error, pointwise over frequency bins."""
+    """AIC-penalised ELPD gain and its standard error, pointwise over frequency bins and
+    block predictions."""
     difference = new.pointwise - old.pointwise
     gain = float(difference.sum()) - (new.n_parameters - old.n_parameters)
     return gain, float(math.sqrt(difference.size) * np.std(difference))
@@ -1091,6 +1164,9 @@ class Discovery(eqx.Module):
     baseline_checks: list
     final_checks: list
     outliers: dict | None
+    undecided: tuple = ()
+    """(name, log Bayes factor) of the best candidate when the search stopped with a check
+    still failing because no term was decisive; empty otherwise."""
 
 
 def discover(
@@ -1130,6 +1206,7 @@ def discover(
             )
         )
     checks = baseline_checks if not findings else run_checks(current, data)
+    undecided = ()
     for _ in range(max_effects):
         if not any(
             not check["passed"] for check in checks if check["name"] not in UNMODELLED_CHECKS
@@ -1143,6 +1220,7 @@ def discover(
         name, (fit, search) = ranked[0]
         log_bayes_factor = fit.schwarz - current.schwarz
         if not log_bayes_factor > DECISIVE_LOG_BAYES_FACTOR:
+            undecided = (name, float(log_bayes_factor))
             break
         gain, gain_se = _elpd_difference(fit, current)
         runner_up = (
@@ -1162,6 +1240,7 @@ def discover(
         baseline_checks=baseline_checks,
         final_checks=checks,
         outliers=outliers if accept_outliers else None,
+        undecided=undecided,
     )
 
 
@@ -1215,7 +1294,7 @@ def sample_final(fit: ModelFit, data: DiscoveryData, *, seed: int = 0) -> FinalP
     slow = _slow_columns(fit.spec)
     if slow.size:
         regressors, _ = regressor_columns(fit.spec, data)
-        level_beta, level_covariance = level_coefficients(
+        level_beta, level_covariance, _ = level_coefficients(
             _LevelNoise(fit.design.mask, fit.design.ramp_scale, fit.spec.gauss_markov_s),
             fit.clean,
             regressors[:, slow],
@@ -1294,6 +1373,42 @@ def _profile_interval(search: dict, key: str) -> dict:
     }
 
 
+def _widened_for_time_constant(summary: dict, search: dict, name: str) -> dict:
+    """The posterior of a parameter tied to a searched time constant (a warm-up's amplitude,
+    a Gauss-Markov sigma) is conditional on the located value, and the two trade against each
+    other (a longer warm-up with a smaller amplitude; a longer correlation time with a larger
+    sigma). Marginalised to first order (delta method): the sd grows by the parameter's slope
+    in log time constant (from the search's fits around the best) times the profile sd of log
+    time constant. A scale (sigma) is widened in its logarithm, so the interval stays
+    positive."""
+    time_constant = _profile_interval(search, "time_constant_s")
+    log_time = np.log(np.asarray(search["time_constant_s"]))
+    estimate = np.array([values[name] for values in search["estimates"]])
+    positive = name == "sigma_gm"
+    best = int(np.argmax(search["score"]))
+    around = slice(max(best - 1, 0), best + 2)
+    transformed = np.log(estimate[around]) if positive else estimate[around]
+    slope = np.polyfit(log_time[around], transformed, 1)[0]
+    z = stats.norm.ppf(0.95)
+    log_sd = (math.log(time_constant["q95"]) - math.log(time_constant["q05"])) / (2 * z)
+    centre = summary["mean"]
+    conditional_sd = summary["sd"] / centre if positive else summary["sd"]
+    sd = math.hypot(conditional_sd, slope * log_sd)
+    low, high = (
+        (centre * math.exp(-z * sd), centre * math.exp(z * sd))
+        if positive
+        else (centre - z * sd, centre + z * sd)
+    )
+    return {
+        **summary,
+        "sd": centre * sd if positive else sd,
+        "q05": low,
+        "q95": high,
+        "method": "posterior at the located time constant, widened by the time constant's "
+        "profile-likelihood spread (delta method)",
+    }
+
+
 def _frequency_interval(fit: ModelFit, index: int, amplitude: float, rate_hz: float) -> dict:
     """Cramér-Rao sd of a sinusoid's frequency in locally white noise: var f =
     6 sigma^2 / (pi^2 A^2 n^3 dt^2), sigma^2 the rate-noise level at the line."""
@@ -1328,6 +1443,9 @@ def effect_parameters(name: str, finding: Finding, posterior: FinalPosterior, da
         case "warmup_transient":
             out = pick("warmup_amplitude")
             out["time_constant"] = _profile_interval(finding.search, "time_constant_s")
+            out["warmup_amplitude"] = _widened_for_time_constant(
+                out["warmup_amplitude"], finding.search, "warmup_amplitude"
+            )
             return out
         case "sinusoid":
             index = len(spec.sinusoid_hz) - 1
@@ -1339,6 +1457,9 @@ def effect_parameters(name: str, finding: Finding, posterior: FinalPosterior, da
         case "gauss_markov":
             out = pick("sigma_gm")
             out["time_constant"] = _profile_interval(finding.search, "time_constant_s")
+            out["sigma_gm"] = _widened_for_time_constant(
+                out["sigma_gm"], finding.search, "sigma_gm"
+            )
             return out
         case "g_sensitivity":
             return pick(f"g_{spec.g_sensitivity[-1]}")

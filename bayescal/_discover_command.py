@@ -125,7 +125,13 @@ def _check_json(check: dict, after: dict | None) -> dict:
 
 def discovery_result(result, posterior, *, baseline_terms, source: str, sim: dict | None) -> dict:
     """The JSON document (the contract of the discovery issue, with more keys)."""
-    from ._discover import EXPLANATIONS, effect_parameters
+    from ._discover import (
+        AMBIGUOUS_LOG_BAYES_FACTOR,
+        DECISIVE_LOG_BAYES_FACTOR,
+        EXPLANATIONS,
+        UNMODELLED_CHECKS,
+        effect_parameters,
+    )
     from ._mcmc import summarize
     from ._output import to_jsonable
 
@@ -135,24 +141,30 @@ def discovery_result(result, posterior, *, baseline_terms, source: str, sim: dic
     for finding in result.findings:
         evidence = {
             "log_bayes_factor": finding.log_bayes_factor,
-            "decisive_above": float(np.log(100.0)),
+            "decisive_above": DECISIVE_LOG_BAYES_FACTOR,
             "baseline_checks_failed": failed_before,
             "checks_passed_after": [
                 name for name in failed_before if after.get(name, {}).get("passed")
             ],
         }
+        explanation = EXPLANATIONS[finding.name]
         if finding.runner_up:
-            evidence["runner_up"] = {
-                "name": finding.runner_up[0],
-                "log_bayes_factor": finding.runner_up[1],
-            }
+            runner, runner_score = finding.runner_up
+            evidence["runner_up"] = {"name": runner, "log_bayes_factor": runner_score}
+            if finding.log_bayes_factor - runner_score < AMBIGUOUS_LOG_BAYES_FACTOR:
+                evidence["indistinguishable_from"] = runner
+                explanation += (
+                    f" On this recording it cannot be told from {runner} (log Bayes factor "
+                    f"{finding.log_bayes_factor - runner_score:.1f} between them, below log 10): "
+                    "both explain the mismatch; a longer recording would decide."
+                )
         if finding.name == "outliers" and result.outliers:
             evidence["fraction"] = result.outliers["fraction"]
             evidence["flagged_samples"] = int(result.outliers["flagged"].sum())
         effects.append(
             {
                 "name": finding.name,
-                "explanation": EXPLANATIONS[finding.name],
+                "explanation": explanation,
                 "location": _location(finding, result),
                 "evidence": evidence,
                 "delta_elpd": finding.delta_elpd,
@@ -177,8 +189,26 @@ def discovery_result(result, posterior, *, baseline_terms, source: str, sim: dic
         ],
         "decision_rule": "a term is accepted when its Schwarz (BIC) log Bayes factor against "
         "the current model exceeds log(100) = 4.6 (decisive); delta_elpd is the AIC-penalised "
-        "gain in log predictive density over independent frequency bins, with its standard error",
+        "gain in log predictive density, pointwise over independent frequency bins of the "
+        "increments and one-block-ahead predictions of 128 block means, with its standard error",
     }
+    still_failing = [
+        check["name"]
+        for check in result.final_checks
+        if not check["passed"] and check["name"] not in UNMODELLED_CHECKS
+    ]
+    if still_failing and result.undecided:
+        name, score = result.undecided
+        document["unexplained"] = {
+            "checks": still_failing,
+            "best_candidate": name,
+            "log_bayes_factor": score,
+            "decisive_above": DECISIVE_LOG_BAYES_FACTOR,
+            "explanation": f"a mismatch remains ({', '.join(still_failing)}); the term that "
+            f"would explain it best, {name}, is not decisive (log Bayes factor {score:.1f}): "
+            "the recording holds too little evidence to name it — record longer, or with more "
+            "of what the term needs (a wider temperature swing, a start from power-on).",
+        }
     if posterior is not None:
         document["posterior"] = {
             "parameters": {
@@ -237,6 +267,8 @@ def discovery_text(document: dict) -> str:
                     f"{value['unit']} (90 %)"
                 )
     lines.append(f"final model: {', '.join(document['final_terms'])}")
+    if "unexplained" in document:
+        lines.append(f"still unexplained: {document['unexplained']['explanation']}")
     for check in document["checks"]:
         mark = "ok" if check["passed_after"] else "MISMATCH"
         before = "ok" if check["passed_before"] else "failed"

@@ -6,10 +6,18 @@ sample) hiding zero, one or two catalogue effects, every one at an amplitude bel
 per-sample white-noise level (invisible in a plot of the raw signal), with random
 parameters; clean controls come with and without an irrelevant varying temperature.
 
+Random parameters put some effects beyond what any method could name from one record (a
+warm-up beside a random walk of the same size, a Gauss-Markov term whose time constant is a
+tenth of the record). So that a miss can be told from a failure, each hidden effect also gets
+the log Bayes factor the recording can be expected to hold for it, computed from the truth
+alone before discovery runs (:func:`expected_log_bayes_factors`); the naming rate is printed
+against it, and over the effects above the detection limit (expected log BF >= log 100).
+
     python benchmarks/discovery_suite.py [--recordings 32] [--seed 0] [--workers 2]
 """
 
 import argparse
+import itertools
 import math
 import multiprocessing
 import sys
@@ -119,6 +127,97 @@ def simulate(hidden, rng, seed):
     return values, rate, temperature, truth
 
 
+def _block_noise_covariance(truth, rate, n):
+    """Covariance of the 128 block means of the recording's stochastic noise, from the truth."""
+    from bayescal._discover import LEVEL_BLOCKS, _gauss_markov_block_covariance
+    from bayescal._level import block_covariance_basis
+    from bayescal._noise_model import component_weights
+
+    edges = np.linspace(0, n, LEVEL_BLOCKS + 1).round().astype(np.int64)
+    start, stop = edges[:-1], edges[1:]
+    weights = np.asarray(
+        component_weights(
+            N=WHITE_SD / math.sqrt(rate),
+            B=truth.get("bias_instability", {}).get("B", 0.0),
+            K=truth.get("rate_random_walk", {}).get("K", 0.0),
+        )
+    )
+    covariance = np.einsum("t,tij->ij", weights, block_covariance_basis(start, stop, rate))
+    if "gauss_markov" in truth:
+        gm = truth["gauss_markov"]
+        covariance += gm["sigma_gm"] ** 2 * _gauss_markov_block_covariance(
+            start, stop, rate, gm["time_constant"]
+        )
+    return covariance, start, stop
+
+
+def _spectral_information(extra_psd, rate):
+    """Expected log-likelihood ratio of white noise plus a stochastic term (its one-sided
+    PSD at the Fourier frequencies) against white noise alone: sum of r - log(1 + r), r the
+    term's share of the white level (the Kullback-Leibler divergence of the two Whittle
+    likelihoods)."""
+    ratio = extra_psd / (2 * WHITE_SD**2 / rate)
+    return float(np.sum(ratio - np.log1p(ratio)))
+
+
+def expected_log_bayes_factors(hidden, truth, rate, n, temperature) -> dict:
+    """For each hidden effect, the log Bayes factor for adding it that discovery can expect on
+    this recording, computed from the truth alone (no fit): a detection limit, so that a miss
+    can be told from a failure. Deterministic terms: half the squared matched-filter
+    signal-to-noise ratio of the effect's block means against the recording's true noise
+    (the other hidden noise terms included), less the Schwarz and search costs discovery
+    charges. Noise terms: the expected log-likelihood ratio against white noise, less the
+    same costs; a Gauss-Markov term must also be told from a random walk, which a record of
+    T seconds does with an expected log-likelihood ratio of about T / (4 tau_c) (each block
+    mean's prediction differs by the term's mean reversion, (1 - phi) x, phi = exp(-dt/tau_c),
+    worth (1 - phi) / 4 per block)."""
+    time_s = np.arange(n) / rate
+    duration = n / rate
+    angular = 2 * np.pi * np.arange(1, n // 2 + 1) / duration
+    schwarz = 0.5 * math.log(n / 2)
+    search = math.log(11)  # the time-constant grid of discovery
+    covariance, start, stop = _block_noise_covariance(truth, rate, n)
+    factor = np.linalg.cholesky(covariance)
+    ones = np.linalg.solve(factor, np.ones(start.size))
+
+    def matched_filter(signal):
+        means = np.array([signal[a:b].mean() for a, b in zip(start, stop, strict=True)])
+        white = np.linalg.solve(factor, means)
+        white -= np.dot(ones, white) / np.dot(ones, ones) * ones
+        return 0.5 * float(np.dot(white, white))
+
+    expected = {}
+    for effect, parameters in truth.items():
+        match effect:
+            case "thermal_bias":
+                signal = parameters["c1"] * (temperature - temperature.mean())
+                expected[effect] = matched_filter(signal) - schwarz
+            case "warmup_transient":
+                signal = parameters["warmup_amplitude"] * np.exp(
+                    -time_s / parameters["time_constant"]
+                )
+                expected[effect] = matched_filter(signal) - schwarz - search
+            case "rate_ramp":
+                expected[effect] = matched_filter(parameters["R"] * time_s) - schwarz
+            case "sinusoid":
+                information = parameters["amplitude"] ** 2 * n / (4 * WHITE_SD**2)
+                expected[effect] = information - 2 * schwarz - math.log(n / 2)
+            case "rate_random_walk":
+                information = _spectral_information(parameters["K"] ** 2 / angular**2, rate)
+                expected[effect] = information - schwarz
+            case "bias_instability":
+                information = _spectral_information(parameters["B"] ** 2 / angular, rate)
+                expected[effect] = information - schwarz
+            case "gauss_markov":
+                sigma, tau = parameters["sigma_gm"], parameters["time_constant"]
+                information = _spectral_information(
+                    4 * sigma**2 * tau / (1 + (angular * tau) ** 2), rate
+                )
+                versus_walk = duration / (4 * tau)
+                expected[effect] = min(information - schwarz, versus_walk) - search
+    return expected
+
+
 def run_one(arguments):
     index, hidden, seed = arguments
     import jax
@@ -131,6 +230,7 @@ def run_one(arguments):
     data = DiscoveryData(
         values=values, rate_hz=rate, channel="gyro_x", unit="deg/s", temperature=temperature
     )
+    expected = expected_log_bayes_factors(hidden, truth, rate, values.size, temperature)
     start = time.perf_counter()
     result = discover(data)
     posterior = sample_final(result.final, data, seed=seed) if result.findings else None
@@ -153,11 +253,45 @@ def run_one(arguments):
         "clean_temperature": "clean_temperature" in hidden,
         "found": found,
         "covered": covered,
+        "expected": expected,
         "seconds": elapsed,
         "n": values.size,
         "rate": rate,
         "health": posterior.diagnostics.passed if posterior else True,
     }
+
+
+def _expected_text(expected: dict) -> str:
+    return " ".join(f"{name}={value:.0f}" for name, value in expected.items()) or "-"
+
+
+DETECTION_BINS = (-math.inf, 0.0, math.log(100), 10.0, 30.0, math.inf)
+
+
+def detection_table(results) -> list[str]:
+    """Naming rate against the expected log Bayes factor of each hidden effect, and the
+    accuracy over the effects discovery can be expected to find (expected log BF at least
+    the decisive log 100)."""
+    pairs = [
+        (value, effect in result["found"])
+        for result in results
+        for effect, value in result["expected"].items()
+    ]
+    lines = ["\nnamed against the evidence the recording holds (expected log BF from the truth):"]
+    for low, high in itertools.pairwise(DETECTION_BINS):
+        inside = [named for value, named in pairs if low <= value < high]
+        if inside:
+            lines.append(
+                f"  {low:>6.1f} .. {high:<6.1f} {sum(inside):>3}/{len(inside):<3} "
+                f"({sum(inside) / len(inside):.2f})"
+            )
+    detectable = [named for value, named in pairs if value >= math.log(100)]
+    if detectable:
+        lines.append(
+            f"effects above the detection limit (expected log BF >= log 100): named "
+            f"{sum(detectable)}/{len(detectable)} ({sum(detectable) / len(detectable):.3f})"
+        )
+    return lines
 
 
 def main() -> int:
@@ -177,7 +311,8 @@ def main() -> int:
             print(
                 f"  #{result['index']:02d} {result['n'] / result['rate'] / 60:5.0f} min "
                 f"{result['rate']:4.0f} Hz  hidden {','.join(result['hidden']) or '-':<36} "
-                f"found {','.join(result['found']) or '-':<36} {result['seconds']:6.1f} s",
+                f"found {','.join(result['found']) or '-':<36} {result['seconds']:6.1f} s  "
+                f"expected log BF {_expected_text(result['expected'])}",
                 flush=True,
             )
     results.sort(key=lambda r: r["index"])
@@ -218,6 +353,7 @@ def main() -> int:
         f"({sum(named.values()) / total_hidden:.3f}); recordings with exactly the hidden "
         f"set: {exact}/{len(results)} ({exact / len(results):.3f})"
     )
+    print("\n".join(detection_table(results)))
     coverage = Counter(), Counter()
     for result in results:
         for name, inside in result["covered"].items():

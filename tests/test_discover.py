@@ -7,16 +7,26 @@ import math
 
 import numpy as np
 import pytest
+from scipy import stats
+from scipy.signal import lfilter
 
 from bayescal._discover import (
+    AMBIGUOUS_LOG_BAYES_FACTOR,
+    LEVEL_BLOCKS,
     DiscoveryData,
     _gauss_markov_rate_autocovariance,
+    _level_design,
+    _LevelNoise,
     discover,
     effect_parameters,
     gauss_markov_allan_variance,
     gauss_markov_increment_autocovariance,
+    level_coefficients,
     sample_final,
 )
+from bayescal._discover_command import discovery_result
+from bayescal._level import block_covariance_basis
+from bayescal._noise_model import component_weights
 
 RATE = 20.0
 MINUTES = 12
@@ -146,6 +156,7 @@ def test_cli_contract_and_outputs(run_cli, tmp_path):
         assert (folder / f"discover_gyro_x_{figure}.png").stat().st_size > 1000
     assert (folder / "discover_gyro_x_posterior.nc").exists()
     assert "warmup_transient" in stdout
+    assert "unexplained" not in document
 
 
 def test_bad_input_is_refused_with_exit_2(run_cli, tmp_path):
@@ -167,3 +178,67 @@ def test_bad_input_is_refused_with_exit_2(run_cli, tmp_path):
     code, _, stderr = run_cli("discover", path, "--channel", "gyro_q", "--json", output)
     assert code == 2 and "gyro_q" in stderr
     assert not output.exists()
+
+
+def test_block_means_likelihood_splits_into_one_block_ahead_predictions():
+    """The block means' predictive densities (regression at its GLS values) sum to the exact
+    Gaussian log-likelihood of the block means around that regression."""
+    t, values, _, rng = _record(6)
+    walk = 2e-4 * np.cumsum(rng.standard_normal(t.size)) / math.sqrt(RATE)
+    regressor = np.exp(-t / 60.0)[:, None]
+    data = values + walk + 0.01 * regressor[:, 0]
+    white, walk_k = WHITE_SD / math.sqrt(RATE), 2e-4
+    theta = np.array([math.log(white), 0.0, math.log(walk_k), 0.0, 0.0, 0.0, 0.0])
+    noise = _LevelNoise(np.array([1.0, 0, 1, 0, 0, 0, 0]), np.asarray(1.0), 0.0)
+    beta, _, predictive = level_coefficients(noise, data, regressor, RATE, theta)
+    assert predictive.shape == (1, LEVEL_BLOCKS)
+
+    means, columns, start, stop = _level_design(data, regressor, RATE)
+    covariance = np.einsum(
+        "t,tij->ij",
+        np.asarray(component_weights(N=white, K=walk_k)),
+        block_covariance_basis(start, stop, RATE),
+    )
+    design = np.column_stack([np.ones(LEVEL_BLOCKS), columns])
+    precision = np.linalg.inv(covariance)
+    gls = np.linalg.solve(design.T @ precision @ design, design.T @ precision @ means)
+    assert beta[0, 0] == pytest.approx(gls[1], rel=1e-8)
+    exact = stats.multivariate_normal(design @ gls, covariance).logpdf(means)
+    assert predictive.sum() == pytest.approx(exact, rel=1e-9)
+
+
+def test_gauss_markov_is_told_from_a_random_walk_only_when_the_record_is_long_enough():
+    """Over a record of T seconds the two differ by about T / (4 tau_c) nats (the Gauss-Markov
+    level reverts to its mean): at tau_c = T / 12 they are reported as indistinguishable, at
+    tau_c = T / 100 the Gauss-Markov term wins decisively."""
+    duration = MINUTES * 60
+    for seed, ratio in ((7, 12.0), (8, 100.0)):
+        _, values, _, rng = _record(seed)
+        time_constant = duration / ratio
+        phi = math.exp(-1 / (RATE * time_constant))
+        sigma = 0.5 * WHITE_SD
+        drive = rng.standard_normal(values.size) * sigma * math.sqrt(1 - phi * phi)
+        result = discover(_data(values + lfilter([1.0], [1.0, -phi], drive)))
+        first = result.findings[0]
+        margin = first.log_bayes_factor - first.runner_up[1]
+        if ratio < 30:
+            assert {first.name, first.runner_up[0]} == {"gauss_markov", "rate_random_walk"}
+            assert margin < AMBIGUOUS_LOG_BAYES_FACTOR
+        else:
+            assert first.name == "gauss_markov"
+            assert margin > AMBIGUOUS_LOG_BAYES_FACTOR
+
+
+def test_a_mismatch_too_weak_to_name_is_reported_as_unexplained():
+    """A thermal bias at about 3.4 standard errors: the temperature check fails, but the
+    evidence for the term is not decisive; the document says so instead of naming it."""
+    _, values, profile, _ = _record(9, temperature=True)
+    blocks = profile[: profile.size // 32 * 32].reshape(32, -1).mean(axis=1)
+    slope = 3.4 * WHITE_SD / math.sqrt(profile.size / 32) / np.linalg.norm(blocks - blocks.mean())
+    result = discover(_data(values + slope * (profile - profile.mean()), profile))
+    assert result.findings == ()
+    document = discovery_result(result, None, baseline_terms=("white",), source="sim", sim=None)
+    assert document["effects"] == []
+    assert document["unexplained"]["checks"] == ["residual_vs_temperature"]
+    assert document["unexplained"]["best_candidate"] == "thermal_bias"
+    assert document["unexplained"]["log_bayes_factor"] < math.log(100)

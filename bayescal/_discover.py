@@ -92,10 +92,10 @@ MAX_COVARIATES = 3
 MAX_THERMAL_DEGREE = 3
 MAX_REGRESSORS = MAX_THERMAL_DEGREE + 1 + 2 * MAX_SINUSOIDS + MAX_COVARIATES
 DECISIVE_LOG_BAYES_FACTOR = math.log(100.0)
+"""Jeffreys' "decisive": odds of 100 to 1."""
 AMBIGUOUS_LOG_BAYES_FACTOR = math.log(10.0)
 """A runner-up closer than this to the accepted term explains the mismatch about as well:
 the two are reported as indistinguishable on this recording."""
-"""Jeffreys' "decisive": odds of 100 to 1."""
 UNMODELLED_CHECKS = ("timestamps",)
 """Checks no model term answers: they are reported, but do not start a search."""
 CHECK_LEVEL = 0.01
@@ -1003,16 +1003,11 @@ def _search_time(context, make_spec, key: str) -> tuple[ModelFit, dict]:
             fits[middle] = fit_model(context, make_spec(float(middle)))
     for _ in range(PARABOLIC_STEPS):
         times = sorted(fits)
-        position = max(range(len(times)), key=lambda i: fits[times[i]].schwarz)
-        if not 0 < position < len(times) - 1:
+        log_times = np.log(times)
+        peak = _peak_parabola(log_times, [fits[t].schwarz for t in times])
+        if peak is None or np.min(np.abs(peak[0] - log_times)) < 0.02:
             break
-        step = _parabola_vertex(
-            np.log(times[position - 1 : position + 2]),
-            [fits[t].schwarz for t in times[position - 1 : position + 2]],
-        )
-        vertex = float(np.exp(step))
-        if min(abs(step - math.log(t)) for t in times) < 0.02:
-            break
+        vertex = float(np.exp(peak[0]))
         fits[vertex] = fit_model(context, make_spec(vertex))
     times = sorted(fits)
     winner = max(times, key=lambda t: fits[t].schwarz)
@@ -1030,13 +1025,17 @@ def _search_time(context, make_spec, key: str) -> tuple[ModelFit, dict]:
     }
 
 
-def _parabola_vertex(x, y) -> float:
-    """Abscissa of the vertex of the parabola through three points, the middle one highest
-    (so the vertex lies between the outer two)."""
-    (x0, x1, x2), (y0, y1, y2) = x, y
-    numerator = (x1 - x0) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y1 - y0)
-    denominator = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0)
-    return float(x1 - 0.5 * numerator / denominator) if denominator else float(x1)
+def _peak_parabola(x, y) -> tuple[float, float] | None:
+    """Vertex and curvature of the parabola through the highest of the points (x sorted) and
+    its two neighbours; None where the highest is at an end or the parabola opens upward."""
+    x, y = np.asarray(x), np.asarray(y)
+    best = int(np.argmax(y))
+    if not 0 < best < x.size - 1:
+        return None
+    curvature, slope, _ = np.polyfit(x[best - 1 : best + 2] - x[best], y[best - 1 : best + 2], 2)
+    if not curvature < 0:
+        return None
+    return float(x[best] - slope / (2 * curvature)), float(curvature)
 
 
 def candidate_fits(context: _Context, current: ModelFit) -> dict[str, tuple[ModelFit, dict]]:
@@ -1350,15 +1349,12 @@ def _profile_interval(search: dict, key: str) -> dict:
     grid, score = np.log(np.asarray(search[key])), np.asarray(search["score"])
     best = int(np.argmax(score))
     centre, low, high = grid[best], grid[0], grid[-1]
-    if 0 < best < grid.size - 1:
-        curvature, slope, _ = np.polyfit(
-            grid[best - 1 : best + 2] - grid[best], score[best - 1 : best + 2], 2
-        )
-        if curvature < 0:
-            centre = grid[best] - slope / (2 * curvature)
-            half = math.sqrt(1.353 / -curvature)
-            low, high = centre - half, centre + half
-    else:
+    peak = _peak_parabola(grid, score)
+    if peak is not None:
+        centre, curvature = peak
+        half = math.sqrt(1.353 / -curvature)
+        low, high = centre - half, centre + half
+    elif best in (0, grid.size - 1):
         inside = grid[score >= score[best] - 1.353]
         low, high = min(inside.min(), centre), max(inside.max(), centre)
         low = grid[0] if best == 0 else low
@@ -1373,35 +1369,35 @@ def _profile_interval(search: dict, key: str) -> dict:
     }
 
 
-def _widened_for_time_constant(summary: dict, search: dict, name: str) -> dict:
+def _widened_for_time_constant(
+    summary: dict, search: dict, name: str, time_constant: dict, *, log_scale: bool
+) -> dict:
     """The posterior of a parameter tied to a searched time constant (a warm-up's amplitude,
     a Gauss-Markov sigma) is conditional on the located value, and the two trade against each
     other (a longer warm-up with a smaller amplitude; a longer correlation time with a larger
     sigma). Marginalised to first order (delta method): the sd grows by the parameter's slope
     in log time constant (from the search's fits around the best) times the profile sd of log
-    time constant. A scale (sigma) is widened in its logarithm, so the interval stays
-    positive."""
-    time_constant = _profile_interval(search, "time_constant_s")
+    time constant (``time_constant``, its :func:`_profile_interval`). With ``log_scale`` (a
+    scale such as sigma) it is widened in its logarithm, so the interval stays positive."""
     log_time = np.log(np.asarray(search["time_constant_s"]))
     estimate = np.array([values[name] for values in search["estimates"]])
-    positive = name == "sigma_gm"
     best = int(np.argmax(search["score"]))
     around = slice(max(best - 1, 0), best + 2)
-    transformed = np.log(estimate[around]) if positive else estimate[around]
+    transformed = np.log(estimate[around]) if log_scale else estimate[around]
     slope = np.polyfit(log_time[around], transformed, 1)[0]
     z = stats.norm.ppf(0.95)
     log_sd = (math.log(time_constant["q95"]) - math.log(time_constant["q05"])) / (2 * z)
     centre = summary["mean"]
-    conditional_sd = summary["sd"] / centre if positive else summary["sd"]
+    conditional_sd = summary["sd"] / centre if log_scale else summary["sd"]
     sd = math.hypot(conditional_sd, slope * log_sd)
     low, high = (
         (centre * math.exp(-z * sd), centre * math.exp(z * sd))
-        if positive
+        if log_scale
         else (centre - z * sd, centre + z * sd)
     )
     return {
         **summary,
-        "sd": centre * sd if positive else sd,
+        "sd": centre * sd if log_scale else sd,
         "q05": low,
         "q95": high,
         "method": "posterior at the located time constant, widened by the time constant's "
@@ -1444,7 +1440,11 @@ def effect_parameters(name: str, finding: Finding, posterior: FinalPosterior, da
             out = pick("warmup_amplitude")
             out["time_constant"] = _profile_interval(finding.search, "time_constant_s")
             out["warmup_amplitude"] = _widened_for_time_constant(
-                out["warmup_amplitude"], finding.search, "warmup_amplitude"
+                out["warmup_amplitude"],
+                finding.search,
+                "warmup_amplitude",
+                out["time_constant"],
+                log_scale=False,
             )
             return out
         case "sinusoid":
@@ -1458,7 +1458,7 @@ def effect_parameters(name: str, finding: Finding, posterior: FinalPosterior, da
             out = pick("sigma_gm")
             out["time_constant"] = _profile_interval(finding.search, "time_constant_s")
             out["sigma_gm"] = _widened_for_time_constant(
-                out["sigma_gm"], finding.search, "sigma_gm"
+                out["sigma_gm"], finding.search, "sigma_gm", out["time_constant"], log_scale=True
             )
             return out
         case "g_sensitivity":

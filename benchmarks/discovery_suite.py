@@ -160,7 +160,7 @@ def _spectral_information(extra_psd, rate):
     return float(np.sum(ratio - np.log1p(ratio)))
 
 
-def expected_log_bayes_factors(hidden, truth, rate, n, temperature) -> dict:
+def expected_log_bayes_factors(truth, rate, n, temperature) -> dict:
     """For each hidden effect, the log Bayes factor for adding it that discovery can expect on
     this recording, computed from the truth alone (no fit): a detection limit, so that a miss
     can be told from a failure. Deterministic terms: half the squared matched-filter
@@ -174,8 +174,10 @@ def expected_log_bayes_factors(hidden, truth, rate, n, temperature) -> dict:
     time_s = np.arange(n) / rate
     duration = n / rate
     angular = 2 * np.pi * np.arange(1, n // 2 + 1) / duration
+    from bayescal._discover import SEARCHED_VALUES
+
     schwarz = 0.5 * math.log(n / 2)
-    search = math.log(11)  # the time-constant grid of discovery
+    search = math.log(SEARCHED_VALUES)
     covariance, start, stop = _block_noise_covariance(truth, rate, n)
     factor = np.linalg.cholesky(covariance)
     ones = np.linalg.solve(factor, np.ones(start.size))
@@ -230,7 +232,7 @@ def run_one(arguments):
     data = DiscoveryData(
         values=values, rate_hz=rate, channel="gyro_x", unit="deg/s", temperature=temperature
     )
-    expected = expected_log_bayes_factors(hidden, truth, rate, values.size, temperature)
+    expected = expected_log_bayes_factors(truth, rate, values.size, temperature)
     start = time.perf_counter()
     result = discover(data)
     posterior = sample_final(result.final, data, seed=seed) if result.findings else None

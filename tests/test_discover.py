@@ -13,6 +13,7 @@ from scipy.signal import lfilter
 from bayescal._discover import (
     AMBIGUOUS_LOG_BAYES_FACTOR,
     LEVEL_BLOCKS,
+    TIME_BLOCKS,
     DiscoveryData,
     _gauss_markov_rate_autocovariance,
     _level_design,
@@ -233,8 +234,9 @@ def test_a_mismatch_too_weak_to_name_is_reported_as_unexplained():
     """A thermal bias at about 3.4 standard errors: the temperature check fails, but the
     evidence for the term is not decisive; the document says so instead of naming it."""
     _, values, profile, _ = _record(9, temperature=True)
-    blocks = profile[: profile.size // 32 * 32].reshape(32, -1).mean(axis=1)
-    slope = 3.4 * WHITE_SD / math.sqrt(profile.size / 32) / np.linalg.norm(blocks - blocks.mean())
+    size = profile.size // TIME_BLOCKS
+    blocks = profile[: size * TIME_BLOCKS].reshape(TIME_BLOCKS, size).mean(axis=1)
+    slope = 3.4 * WHITE_SD / math.sqrt(size) / np.linalg.norm(blocks - blocks.mean())
     result = discover(_data(values + slope * (profile - profile.mean()), profile))
     assert result.findings == ()
     document = discovery_result(result, None, baseline_terms=("white",), source="sim", sim=None)

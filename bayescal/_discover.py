@@ -46,7 +46,7 @@ from scipy.signal import windows
 from ._allan import allan_deviation
 from ._edf import equivalent_degrees_of_freedom
 from ._level import block_covariance_basis
-from ._mcmc import diagnose, sample_ensemble, summarize, walker_count
+from ._mcmc import batch_log_density, diagnose, sample_ensemble, summarize, walker_count
 from ._noise_fit import allan_reference_scales
 from ._noise_model import SPECTRAL_COMPONENTS, NoiseModel, component_weights
 from ._units import noise_parameter_unit
@@ -307,11 +307,6 @@ def _maximum(design: _Design):
     pointwise, beta, precision = _profile(design, best)
     hessian = jax.hessian(lambda theta: objective(theta, None))(best)
     return best, pointwise, beta, precision, hessian, converged
-
-
-@eqx.filter_jit
-def _batch_marginal(design: _Design, theta):
-    return jax.vmap(lambda t: _marginal_log_posterior(design, t))(theta)
 
 
 @eqx.filter_jit
@@ -1273,8 +1268,9 @@ def sample_final(fit: ModelFit, data: DiscoveryData, *, seed: int = 0) -> FinalP
     hessian = fit.hessian[np.ix_(active, active)]
     covariance = np.linalg.pinv(hessian)
     names = [NOISE_SLOTS[i] for i in active]
+    log_posterior = batch_log_density(_marginal_log_posterior, fit.design)
     sampler, converged = sample_ensemble(
-        lambda sub: _batch_marginal(fit.design, jnp.asarray(embed(sub))),
+        lambda sub: log_posterior(embed(sub)),
         full[active],
         covariance,
         rng,

@@ -23,7 +23,9 @@ a flat prior), which :func:`bias_given_noise` returns for any number of posterio
 import itertools
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
+import jax.scipy.linalg
 import numpy as np
 
 from ._noise_model import SPECTRAL_COMPONENTS
@@ -123,10 +125,7 @@ def bias_given_noise(summary: LevelSummary, variances, ramp=0.0):
     covariance = jnp.einsum("...t,tij->...ij", variances, summary.basis)
     target = summary.block_mean - jnp.asarray(ramp)[..., None] * summary.block_time_s
     factor = jnp.linalg.cholesky(covariance)
-    ones = jnp.ones(summary.block_mean.shape)
-    solve = lambda rhs: jnp.linalg.solve(  # noqa: E731
-        jnp.swapaxes(factor, -1, -2), jnp.linalg.solve(factor, rhs[..., None])
-    )[..., 0]
-    weights = solve(jnp.broadcast_to(ones, target.shape))
+    ones = jnp.broadcast_to(jnp.ones(summary.block_mean.shape), target.shape)
+    weights = jax.scipy.linalg.cho_solve((factor, True), ones[..., None])[..., 0]
     precision = jnp.sum(weights, axis=-1)
     return jnp.sum(weights * target, axis=-1) / precision, 1.0 / precision

@@ -64,7 +64,7 @@ from scipy.spatial.transform import Rotation
 
 from ._errors import InputError
 from ._gravity import LocalGravity
-from ._mcmc import Diagnostics, diagnose, sample_ensemble, walker_count
+from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
 from ._sections import MIN_DURATION_S, find_static_sections
 from ._two_position import MOVING_LIMIT
 from ._units import STANDARD_GRAVITY, parse_unit
@@ -743,16 +743,6 @@ def _maximum_a_posteriori(problem: MultiPositionProblem):
     return solution.value, hessian, solution.result == optx.RESULTS.successful
 
 
-@partial(jax.jit, static_argnames="treedef")
-def _batch_log_posterior(leaves, treedef, theta):
-    """Log-posterior of a batch of walkers. The problem comes as its array leaves and tree
-    structure: one compilation serves every session with the same number of poses, and a
-    plain list of arrays costs a few times less to pass on each of the sampler's thousands of
-    calls than the module through ``eqx.filter_jit``."""
-    problem = jax.tree_util.tree_unflatten(treedef, leaves)
-    return jax.vmap(problem.log_posterior)(theta)
-
-
 @dataclass(frozen=True)
 class BayesianCalibration:
     names: tuple[str, ...]
@@ -784,9 +774,8 @@ def bayesian_multi_position(
     rng = np.random.default_rng(seed)
     best, hessian, map_converged = _maximum_a_posteriori(problem)
     covariance = np.linalg.pinv(np.asarray(hessian))
-    leaves, treedef = jax.tree_util.tree_flatten(problem)
     sampler, converged = sample_ensemble(
-        lambda theta: _batch_log_posterior(leaves, treedef, theta),
+        batch_log_density(MultiPositionProblem.log_posterior, problem),
         np.asarray(best),
         covariance,
         rng,

@@ -24,7 +24,7 @@ import optimistix as optx
 from ._allan import DeviationResult
 from ._errors import InputError
 from ._level import LevelSummary, bias_given_noise, level_summary
-from ._mcmc import Diagnostics, diagnose, sample_ensemble, walker_count
+from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
 from ._noise_model import component_weights
 from ._whittle import SpectralSummary, spectral_summary, whittle_log_likelihood
 
@@ -238,13 +238,6 @@ def _maximum_a_posteriori(problem: NoiseProblem):
 
 
 @eqx.filter_jit
-def _batch_log_posterior(problem: NoiseProblem, theta):
-    """Log-posterior of a batch of walkers; the problem is an argument, not a constant, so
-    one compilation serves every record of the same shape."""
-    return jax.vmap(problem.log_posterior)(theta)
-
-
-@eqx.filter_jit
 def _draw_quantities(problem: NoiseProblem, kept, key):
     """Parameter values, bias draws (from its Gaussian conditional) and the pointwise
     log-likelihood for each kept posterior draw."""
@@ -336,7 +329,7 @@ def sample_noise(
     rng = np.random.default_rng(seed)
     estimate = point_estimate(problem)
     sampler, converged = sample_ensemble(
-        lambda theta: _batch_log_posterior(problem, jnp.asarray(theta)),
+        batch_log_density(NoiseProblem.log_posterior, problem),
         estimate.theta,
         estimate.covariance,
         rng,

@@ -375,11 +375,6 @@ def _map(problem: ThermalProblem):
 
 
 @eqx.filter_jit
-def _batch(problem: ThermalProblem, theta):
-    return jax.vmap(problem.log_posterior)(theta)
-
-
-@eqx.filter_jit
 def _draw_regression(problem: ThermalProblem, theta, key):
     """For each noise draw, a draw of the regression from its Gaussian conditional; also the
     conditional means and covariances, whose mixture is the posterior."""
@@ -458,13 +453,13 @@ def sample_thermal(
     degree_scores: dict | None = None,
 ) -> ThermalFit:
     """MAP and Laplace for the noise, emcee posterior, regression draws; checked."""
-    from ._mcmc import diagnose, sample_ensemble, walker_count
+    from ._mcmc import batch_log_density, diagnose, sample_ensemble, walker_count
 
     best, hessian, converged = _map(problem)
     start, covariance = np.asarray(best), np.linalg.pinv(np.asarray(hessian))
     rng = np.random.default_rng(seed)
     sampler, done = sample_ensemble(
-        lambda theta: _batch(problem, jnp.asarray(theta)),
+        batch_log_density(ThermalProblem.log_posterior, problem),
         start,
         covariance,
         rng,

@@ -106,6 +106,8 @@ PARABOLIC_STEPS = 3
 """Refinements of a searched time constant by a parabola through the best score and its two
 neighbours (in log time constant), after the grid and its midpoints."""
 SEARCHED_VALUES = 2 * GRID_POINTS - 1 + PARABOLIC_STEPS
+PROFILE_DROP = 0.5 * stats.chi2.ppf(0.90, 1)
+"""Fall of a profile log-likelihood from its peak at the ends of a 90 % interval."""
 PRIOR_LOG_SD = 4.0
 LEVEL_BLOCKS = 128
 """Block means for the coefficients of slow deterministic terms (see :func:`fit_model`)."""
@@ -982,8 +984,13 @@ def _search_time(context, make_spec, key: str) -> tuple[ModelFit, dict]:
     midpoints to its neighbours and then by parabolic steps in log time constant (a
     deterministic term with a time constant off by a third leaves a residual that a noise
     term would take up); the profile (time constant, Schwarz score) is returned for the
-    interval. A later step searches only around the time constant the previous step found
-    for the same term."""
+    interval, sampled also where the parabola puts the ends of the 90 % interval (the profile
+    is skewed, and the grid's neighbours of the peak can sit far out on it). A later step
+    searches only around the time constant the previous step found for the same term. Where
+    the best is the grid's longest time constant, the grid is extended by its own step until
+    the score falls, up to the record's length (beyond it a decay is a ramp): a true value
+    just past the grid's end would otherwise be located at the end with a zero-width
+    interval."""
     previous = context.summaries.get(("best time", key))
     if previous is None:
         grid = list(_time_grid(context.data))
@@ -991,6 +998,11 @@ def _search_time(context, make_spec, key: str) -> tuple[ModelFit, dict]:
         grid = [previous / 1.6, previous, previous * 1.6]
     fits = {t: fit_model(context, make_spec(float(t))) for t in grid}
     best = max(fits, key=lambda t: fits[t].schwarz)
+    step = grid[1] / grid[0]
+    while best == grid[-1] and best * step <= context.data.duration_s:
+        grid.append(best * step)
+        fits[grid[-1]] = fit_model(context, make_spec(float(grid[-1])))
+        best = max(fits, key=lambda t: fits[t].schwarz)
     position = grid.index(best)
     for neighbour in (position - 1, position + 1):
         if 0 <= neighbour < len(grid):
@@ -1004,6 +1016,12 @@ def _search_time(context, make_spec, key: str) -> tuple[ModelFit, dict]:
             break
         vertex = float(np.exp(peak[0]))
         fits[vertex] = fit_model(context, make_spec(vertex))
+    times = sorted(fits)
+    peak = _peak_parabola(np.log(times), [fits[t].schwarz for t in times])
+    if peak is not None:
+        half = math.sqrt(PROFILE_DROP / -peak[1])
+        for end in (math.exp(peak[0] - half), math.exp(peak[0] + half)):
+            fits[end] = fit_model(context, make_spec(end))
     times = sorted(fits)
     winner = max(times, key=lambda t: fits[t].schwarz)
     context.summaries[("best time", key)] = winner
@@ -1020,17 +1038,24 @@ def _search_time(context, make_spec, key: str) -> tuple[ModelFit, dict]:
     }
 
 
-def _peak_parabola(x, y) -> tuple[float, float] | None:
-    """Vertex and curvature of the parabola through the highest of the points (x sorted) and
-    its two neighbours; None where the highest is at an end or the parabola opens upward."""
+def _peak_parabola(x, y) -> tuple[float, float, float] | None:
+    """Vertex, curvature and height of the parabola through the highest of the points (x
+    sorted) and its two neighbours; None where the highest is at an end or the parabola opens
+    upward."""
     x, y = np.asarray(x), np.asarray(y)
     best = int(np.argmax(y))
     if not 0 < best < x.size - 1:
         return None
-    curvature, slope, _ = np.polyfit(x[best - 1 : best + 2] - x[best], y[best - 1 : best + 2], 2)
+    curvature, slope, value = np.polyfit(
+        x[best - 1 : best + 2] - x[best], y[best - 1 : best + 2], 2
+    )
     if not curvature < 0:
         return None
-    return float(x[best] - slope / (2 * curvature)), float(curvature)
+    return (
+        float(x[best] - slope / (2 * curvature)),
+        float(curvature),
+        float(value - slope**2 / (4 * curvature)),
+    )
 
 
 def candidate_fits(context: _Context, current: ModelFit) -> dict[str, tuple[ModelFit, dict]]:
@@ -1338,20 +1363,31 @@ def sample_final(fit: ModelFit, data: DiscoveryData, *, seed: int = 0) -> FinalP
 
 
 def _profile_interval(search: dict, key: str) -> dict:
-    """Value and 90 % profile-likelihood interval of a searched time constant: a parabola in
-    log(time constant) through the best grid point and its neighbours, cut where the profile
-    log-likelihood has fallen by 1.353 (half the chi-square(1) 90 % point). Where the best
-    point sits at the end of the grid, the interval runs to the grid's end on that side."""
+    """Value and 90 % profile-likelihood interval of a searched time constant, in log(time
+    constant): the peak from the parabola through the best point and its neighbours; each
+    end where the profile has fallen by PROFILE_DROP, by a parabola from the peak through the
+    point on that side whose fall is nearest to it (the search samples the profile near both
+    ends, and a profile is seldom symmetric). Where the best point sits at the end of the
+    search, the interval runs to the search's end on that side."""
     grid, score = np.log(np.asarray(search[key])), np.asarray(search["score"])
     best = int(np.argmax(score))
     centre, low, high = grid[best], grid[0], grid[-1]
     peak = _peak_parabola(grid, score)
     if peak is not None:
-        centre, curvature = peak
-        half = math.sqrt(1.353 / -curvature)
-        low, high = centre - half, centre + half
+        centre, curvature, height = peak
+        ends = []
+        for side in (-1.0, 1.0):
+            offset, fall = side * (grid - centre), height - score
+            usable = (offset > 1e-3) & (fall > 0)
+            if np.any(usable):
+                nearest = np.argmin(np.abs(np.log(fall[usable] / PROFILE_DROP)))
+                half = offset[usable][nearest] * math.sqrt(PROFILE_DROP / fall[usable][nearest])
+            else:
+                half = math.sqrt(PROFILE_DROP / -curvature)
+            ends.append(centre + side * half)
+        low, high = ends
     elif best in (0, grid.size - 1):
-        inside = grid[score >= score[best] - 1.353]
+        inside = grid[score >= score[best] - PROFILE_DROP]
         low, high = min(inside.min(), centre), max(inside.max(), centre)
         low = grid[0] if best == 0 else low
         high = grid[-1] if best == grid.size - 1 else high
@@ -1360,7 +1396,7 @@ def _profile_interval(search: dict, key: str) -> dict:
         "q05": float(math.exp(low)),
         "q95": float(math.exp(high)),
         "unit": "s",
-        "method": "profile likelihood (parabola in log time constant) over a search of "
+        "method": "profile likelihood in log time constant over a search of "
         f"{grid.size} values ({math.exp(grid[0]):.3g} to {math.exp(grid[-1]):.3g} s)",
     }
 

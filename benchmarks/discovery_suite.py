@@ -225,7 +225,13 @@ def run_one(arguments):
     import jax
 
     jax.config.update("jax_enable_x64", True)
-    from bayescal._discover import DiscoveryData, discover, effect_parameters, sample_final
+    from bayescal._discover import (
+        AMBIGUOUS_LOG_BAYES_FACTOR,
+        DiscoveryData,
+        discover,
+        effect_parameters,
+        sample_final,
+    )
 
     rng = np.random.default_rng(seed)
     values, rate, temperature, truth = simulate(hidden, rng, seed)
@@ -260,6 +266,13 @@ def run_one(arguments):
         "n": values.size,
         "rate": rate,
         "health": posterior.diagnostics.passed if posterior else True,
+        "indistinguishable": [
+            finding.runner_up[0]
+            for finding in result.findings
+            if finding.runner_up
+            and finding.log_bayes_factor - finding.runner_up[1] < AMBIGUOUS_LOG_BAYES_FACTOR
+        ],
+        "unexplained": result.undecided[0] if result.undecided else None,
     }
 
 
@@ -294,6 +307,29 @@ def detection_table(results) -> list[str]:
             f"{sum(detectable)}/{len(detectable)} ({sum(detectable) / len(detectable):.3f})"
         )
     return lines
+
+
+def missed_table(results) -> list[str]:
+    """What the user was told about each hidden effect discovery did not name: that the
+    named term cannot be told from it (``indistinguishable_from``), that a mismatch is left
+    unexplained (a check still fails, no term decisive), or nothing (every check passed)."""
+    told = {True: Counter(), False: Counter()}
+    for result in results:
+        for effect, value in result["expected"].items():
+            if effect in result["found"]:
+                continue
+            if effect in result["indistinguishable"]:
+                what = "reported as indistinguishable from the term named"
+            elif result["unexplained"]:
+                what = "an unexplained mismatch reported"
+            else:
+                what = "nothing located (every check passed)"
+            told[value >= math.log(100)][what] += 1
+    lines = ["\nhidden effects not named, and what the user was told:"]
+    for above, label in ((True, "above"), (False, "below")):
+        for what, count in sorted(told[above].items()):
+            lines.append(f"  {label} the detection limit: {count:>3}  {what}")
+    return lines if len(lines) > 1 else []
 
 
 def main() -> int:
@@ -356,6 +392,7 @@ def main() -> int:
         f"set: {exact}/{len(results)} ({exact / len(results):.3f})"
     )
     print("\n".join(detection_table(results)))
+    print("\n".join(missed_table(results)))
     coverage = Counter(), Counter()
     for result in results:
         for name, inside in result["covered"].items():

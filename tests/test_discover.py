@@ -83,6 +83,24 @@ def test_concealed_sinusoid_is_named_and_its_parameters_covered():
     assert parameters["amplitude"]["unit"] == "deg/s"
 
 
+def test_warmup_longer_than_the_first_grid_is_located_with_an_interval():
+    """The time-constant grid ends at a third of the record (240 s here); a warm-up of 300 s
+    must still be located inside a 90 % interval of non-zero width, not pinned at the end."""
+    t, values, _, _ = _record(5)
+    amplitude, time_constant = 0.5 * WHITE_SD, 300.0
+    data = _data(values + amplitude * np.exp(-t / time_constant))
+    result = discover(data)
+    assert [f.name for f in result.findings] == ["warmup_transient"]
+    posterior = sample_final(result.final, data, seed=0)
+    assert posterior.diagnostics.passed, posterior.diagnostics.failures
+    parameters = effect_parameters("warmup_transient", result.findings[0], posterior, data)
+    located = parameters["time_constant"]
+    assert located["q05"] <= time_constant <= located["q95"]
+    assert located["q95"] > 1.1 * located["q05"] and located["q95"] > t[-1] / 3
+    covered = parameters["warmup_amplitude"]
+    assert covered["q05"] <= amplitude <= covered["q95"]
+
+
 def test_thermal_bias_is_told_from_a_random_walk_by_its_signature():
     t, values, profile, rng = _record(3, temperature=True)
     slope = 0.5 * WHITE_SD / np.ptp(profile)

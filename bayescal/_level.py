@@ -23,10 +23,9 @@ a flat prior), which :func:`bias_given_noise` returns for any number of posterio
 import itertools
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
-import jax.scipy.linalg
 import numpy as np
+from jax.scipy.linalg import cho_solve
 
 from ._noise_model import SPECTRAL_COMPONENTS
 
@@ -126,6 +125,6 @@ def bias_given_noise(summary: LevelSummary, variances, ramp=0.0):
     target = summary.block_mean - jnp.asarray(ramp)[..., None] * summary.block_time_s
     factor = jnp.linalg.cholesky(covariance)
     ones = jnp.broadcast_to(jnp.ones(summary.block_mean.shape), target.shape)
-    weights = jax.scipy.linalg.cho_solve((factor, True), ones[..., None])[..., 0]
+    weights = cho_solve((factor, True), ones[..., None])[..., 0]
     precision = jnp.sum(weights, axis=-1)
     return jnp.sum(weights * target, axis=-1) / precision, 1.0 / precision

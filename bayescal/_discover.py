@@ -1,7 +1,11 @@
 """Discovery: find the physics a model of a static channel left out, add it, show the fit
 improve.
 
-The loop (documented for users in the README, section "Discovery"):
+First, two effects of single samples are scanned for on the samples' distribution, each
+accepted on a decisive Bayes factor: clipping at a rail (``saturation``,
+:mod:`bayescal._saturation`; the clipped samples are imputed for what follows) and isolated
+glitches (``outliers``, replaced by their neighbours' mean). Then the loop (documented for
+users in the README, section "Discovery"):
 
 1. fit the current model — bias, noise terms and deterministic terms — by its Whittle
    likelihood (:mod:`bayescal._whittle`): the periodogram of the increments of the data minus
@@ -12,7 +16,7 @@ The loop (documented for users in the README, section "Discovery"):
    frequency, the Whittle bins above it;
 2. run the checks (:func:`run_checks`): Allan deviation against the model, the spectrum in
    octave bands and its largest line, residual block means over time, against the temperature
-   and against the accelerometers, tails, discrete levels, time stamps. Each gives a
+   and against the accelerometers, tails, a rail, discrete levels, time stamps. Each gives a
    statistic, a p-value (Bonferroni-corrected over the places it looked) and where it looked;
 3. fit every catalogue term not yet in the model (../shared/DESIGN.md names), and compare each
    with the current model by the Schwarz (BIC) approximation of the log Bayes factor. A
@@ -49,6 +53,7 @@ from ._level import block_covariance_basis
 from ._mcmc import batch_log_density, diagnose, sample_ensemble, summarize, walker_count
 from ._noise_fit import allan_reference_scales
 from ._noise_model import SPECTRAL_COMPONENTS, NoiseModel, component_weights
+from ._saturation import impute_clipped, rail_check, saturation_scan
 from ._units import noise_parameter_unit
 from ._whittle import regression_coefficients, spectral_summary, whittle_log_likelihood
 
@@ -71,6 +76,9 @@ EXPLANATIONS = {
     "recording departs from the rest, and the departure decays.",
     "outliers": "Isolated glitches far outside the noise: the residual has heavier tails than "
     "a Gaussian.",
+    "saturation": "The output is clipped at the end of the sensor's range: samples that would "
+    "lie beyond it are stuck on one value (the rail), which pulls the mean in and shrinks the "
+    "spread.",
     "g_sensitivity": "The gyro bias moves with the specific force: the residual follows an "
     "accelerometer channel.",
 }
@@ -151,6 +159,7 @@ class ModelSpec(eqx.Module):
     warmup_s: float = eqx.field(static=True, default=0.0)
     sinusoid_hz: tuple[float, ...] = eqx.field(static=True, default=())
     g_sensitivity: tuple[str, ...] = eqx.field(static=True, default=())
+    saturation: bool = eqx.field(static=True, default=False)
     outliers: bool = eqx.field(static=True, default=False)
 
     def terms(self) -> list[str]:
@@ -160,6 +169,7 @@ class ModelSpec(eqx.Module):
         names += ["warmup_transient"] * (self.warmup_s > 0)
         names += ["sinusoid"] * len(self.sinusoid_hz)
         names += ["g_sensitivity"] * len(self.g_sensitivity)
+        names += ["saturation"] * self.saturation
         names += ["outliers"] * self.outliers
         return names
 
@@ -335,7 +345,8 @@ class ModelFit(eqx.Module):
     residual: np.ndarray
     """The data minus the fitted deterministic terms (bias and noise left)."""
     clean: np.ndarray
-    """The data the model was fitted to (outliers replaced when the model has them)."""
+    """The data the model was fitted to (clipped samples imputed and outliers replaced when
+    the model has those terms)."""
     design: _Design
     hessian: np.ndarray
 
@@ -410,18 +421,21 @@ class _Context(eqx.Module):
     data: DiscoveryData
     prior_scales: dict
     n_frequencies: int
+    unclipped: np.ndarray
+    """The data with clipped samples imputed (the data itself when nothing is clipped)."""
     clean: np.ndarray
+    """``unclipped`` with the outliers replaced (itself when there are none)."""
     summaries: dict
     """Spectral summaries already computed, by the parts of a spec they depend on, and the
     time constants found by earlier searches."""
 
 
-def _context(data: DiscoveryData, clean: np.ndarray) -> _Context:
+def _context(data: DiscoveryData, unclipped: np.ndarray, clean: np.ndarray) -> _Context:
     allan = allan_deviation(clean, data.rate_hz, "octave")
     scales = allan_reference_scales(allan)
     scales["G"] = float(np.nanmax(allan.deviation)) * 2.0
     half = np.count_nonzero(np.isfinite(clean)) // 2
-    return _Context(data, scales, half, clean, {})
+    return _Context(data, scales, half, unclipped, clean, {})
 
 
 def _slow_columns(spec: ModelSpec) -> np.ndarray:
@@ -514,11 +528,14 @@ def fit_model(context: _Context, spec: ModelSpec) -> ModelFit:
     score (log-likelihood, Schwarz) takes the block means' exact likelihood for the band they
     cover and the Whittle bins above it, so that no frequency is counted twice."""
     data = context.data
-    values = context.clean if spec.outliers else data.values
+    values = (
+        context.clean if spec.outliers else context.unclipped if spec.saturation else data.values
+    )
     regressors, _ = regressor_columns(spec, data)
     time_constant = spec.gauss_markov_s or 1.0
     n_regressors = len(spec.regressor_names())
     key = (
+        spec.saturation,
         spec.outliers,
         spec.thermal_degree,
         spec.warmup_s,
@@ -947,6 +964,7 @@ def run_checks(fit: ModelFit, data: DiscoveryData) -> list[dict]:
         )
     checks += [
         _tail_check(fit.clean, rate),
+        rail_check(fit.clean, rate, unit),
         _levels_check(fit, rate, unit),
         _timestamp_check(data),
     ]
@@ -968,6 +986,7 @@ def _replace(spec: ModelSpec, **changes) -> ModelSpec:
             "warmup_s",
             "sinusoid_hz",
             "g_sensitivity",
+            "saturation",
             "outliers",
         )
     }
@@ -1186,6 +1205,7 @@ class Discovery(eqx.Module):
     undecided: tuple = ()
     """(name, log Bayes factor) of the best candidate when the search stopped with a check
     still failing because no term was decisive; empty otherwise."""
+    saturation: dict | None = None
 
 
 def discover(
@@ -1194,36 +1214,51 @@ def discover(
     baseline: tuple[str, ...] = ("white",),
     max_effects: int = 4,
     progress: Callable[[str], None] | None = None,
+    seed: int = 0,
 ) -> Discovery:
-    """Find, name and model what the ``baseline`` noise terms leave out of ``data``."""
+    """Find, name and model what the ``baseline`` noise terms leave out of ``data``.
+
+    Two sample-level effects are scanned for first, on the samples' distribution: clipped
+    samples (``saturation``, imputed with ``seed`` for the fits that follow) and isolated
+    glitches (``outliers``, replaced by their neighbours' mean)."""
     report = progress or (lambda message: None)
     unknown = [term for term in baseline if term not in TERM_SLOT]
     if unknown:
         raise ValueError(f"baseline: unknown term(s) {unknown}; known: {sorted(TERM_SLOT)}")
     if "white" not in baseline:
         baseline = ("white", *baseline)
-    outliers = outlier_scan(data.values)
-    accept_outliers = outliers["log_bayes_factor"] > DECISIVE_LOG_BAYES_FACTOR
-    clean = _without_outliers(data.values, outliers["flagged"]) if accept_outliers else data.values
-    context = _context(data, clean)
+
+    def decisive(scan):
+        return scan if scan and scan["log_bayes_factor"] > DECISIVE_LOG_BAYES_FACTOR else None
+
+    saturation = decisive(saturation_scan(data.values, decisive=DECISIVE_LOG_BAYES_FACTOR))
+    unclipped = (
+        impute_clipped(data.values, saturation, np.random.default_rng(seed))
+        if saturation
+        else data.values
+    )
+    outliers = decisive(outlier_scan(unclipped))
+    clean = _without_outliers(unclipped, outliers["flagged"]) if outliers else unclipped
+    context = _context(data, unclipped, clean)
     report("fitting the baseline")
     current = fit_model(context, ModelSpec(noise=tuple(baseline)))
     baseline_fit = current
     baseline_checks = run_checks(current, data)
     findings = []
-    if accept_outliers:
-        current = fit_model(context, _replace(current.spec, outliers=True))
-        findings.append(
-            Finding(
-                "outliers",
-                current,
-                outliers["log_bayes_factor"],
-                outliers["delta_elpd"],
-                outliers["delta_elpd_se"],
-                (),
-                {},
+    for name, scan in (("saturation", saturation), ("outliers", outliers)):
+        if scan:
+            current = fit_model(context, _replace(current.spec, **{name: True}))
+            findings.append(
+                Finding(
+                    name,
+                    current,
+                    scan["log_bayes_factor"],
+                    scan["delta_elpd"],
+                    scan["delta_elpd_se"],
+                    (),
+                    {},
+                )
             )
-        )
     checks = baseline_checks if not findings else run_checks(current, data)
     undecided = ()
     for _ in range(max_effects):
@@ -1258,8 +1293,9 @@ def discover(
         findings=tuple(findings),
         baseline_checks=baseline_checks,
         final_checks=checks,
-        outliers=outliers if accept_outliers else None,
+        outliers=outliers,
         undecided=undecided,
+        saturation=saturation,
     )
 
 
@@ -1495,7 +1531,7 @@ def effect_parameters(name: str, finding: Finding, posterior: FinalPosterior, da
             return out
         case "g_sensitivity":
             return pick(f"g_{spec.g_sensitivity[-1]}")
-        case "outliers":
+        case "outliers" | "saturation":
             return {}
     slot = TERM_SLOT[name]
     return pick(slot)

@@ -41,7 +41,12 @@ def add_parser(commands) -> None:
     parser.add_argument(
         "--out", metavar="DIR", help="figures before/after and the final posterior (netCDF)"
     )
-    parser.add_argument("--seed", type=int, default=0, help="seed of the posterior sampler")
+    parser.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="seed of the posterior sampler (and of the imputation of clipped samples)",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress messages")
     parser.set_defaults(run=run)
 
@@ -161,6 +166,17 @@ def discovery_result(result, posterior, *, baseline_terms, source: str, sim: dic
         if finding.name == "outliers" and result.outliers:
             evidence["fraction"] = result.outliers["fraction"]
             evidence["flagged_samples"] = int(result.outliers["flagged"].sum())
+        if finding.name == "saturation" and result.saturation:
+            evidence["rails"] = {
+                side: {**rail, "unit": result.data.unit}
+                for side, rail in result.saturation["rails"].items()
+            }
+            values = result.data.values
+            evidence["unclipped_mean"] = result.saturation["mean"]
+            evidence["unclipped_sd"] = result.saturation["sd"]
+            evidence["clipped_mean"] = float(np.nanmean(values))
+            evidence["clipped_sd"] = float(np.nanstd(values))
+            evidence["unit"] = result.data.unit
         effects.append(
             {
                 "name": finding.name,
@@ -234,6 +250,7 @@ def _location(finding, result) -> dict:
         "warmup_transient": "residual_time",
         "rate_ramp": "residual_time",
         "outliers": "tails",
+        "saturation": "rail",
         "quantization": "discrete_levels",
     }.get(finding.name, "allan_deviation")
     if finding.name == "g_sensitivity":
@@ -260,6 +277,17 @@ def discovery_text(document: dict) -> str:
             f"{effect['delta_elpd']:.1f} ± {effect['delta_elpd_se']:.1f}"
         )
         lines.append(f"   {effect['explanation']}")
+        if effect["name"] == "saturation":
+            evidence = effect["evidence"]
+            for side, rail in evidence["rails"].items():
+                lines.append(
+                    f"   {side} rail {rail['value']:.6g} {rail['unit']}: {rail['samples']} samples"
+                )
+            lines.append(
+                f"   unclipped mean {evidence['unclipped_mean']:.6g} {evidence['unit']}, sd "
+                f"{evidence['unclipped_sd']:.4g} (as recorded: {evidence['clipped_mean']:.6g}, "
+                f"{evidence['clipped_sd']:.4g})"
+            )
         for name, value in effect["parameters"].items():
             if "q05" in value:
                 lines.append(
@@ -297,7 +325,7 @@ def findings_for_report(table, data, *, seed: int = 0, baseline=("white",)) -> d
         temperature=temperature,
         notes=data.notes,
     )
-    result = discover(discovery_data, baseline=tuple(baseline))
+    result = discover(discovery_data, baseline=tuple(baseline), seed=seed)
     posterior = sample_final(result.final, discovery_data, seed=seed) if result.findings else None
     return discovery_result(
         result, posterior, baseline_terms=list(baseline), source=table.source, sim=None
@@ -347,7 +375,11 @@ def run(args) -> int:
     data, _ = read_discovery_data(args.file, args, args.channel)
     talk = (lambda m: print(f"discover: {m}", file=sys.stderr)) if not args.quiet else None
     result = discover(
-        data, baseline=baseline or ("white",), max_effects=args.max_effects, progress=talk
+        data,
+        baseline=baseline or ("white",),
+        max_effects=args.max_effects,
+        progress=talk,
+        seed=args.seed,
     )
     posterior = sample_final(result.final, data, seed=args.seed) if result.findings else None
     baseline_terms = list(dict.fromkeys(("white", *baseline)))

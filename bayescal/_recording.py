@@ -402,6 +402,25 @@ def _check_constant_and_rail(values, relative_time, offset, source, column, unit
             )
 
 
+def _clipping_notes(values, unit) -> list[str]:
+    """A rail inside the noise (the loader refuses one far outside it): the samples may be
+    clipped at the sensor's range, which biases a mean and a spread computed from them.
+    Heavy tails on a coarse converter step can pile samples on the extreme too, so this is a
+    note; discovery decides (:func:`bayescal._saturation.saturation_scan`)."""
+    from ._saturation import rail_check
+
+    check = rail_check(values, 1.0, unit)
+    if check["p_value"] >= 0.01:
+        return []
+    where = check["location"]
+    return [
+        f"{where['samples']} samples ({100 * where['fraction']:.2g}%) sit on the record's "
+        f"{'largest' if where['side'] == 'upper' else 'smallest'} value, {where['rail']:g} "
+        f"{unit}, more than a normal spread puts there: the channel may be clipped at its "
+        "range (saturation), which biases its mean and spread; `bayescal discover` tests for it"
+    ]
+
+
 def seconds_from_start(
     table: Table, time_column: str | None, time_unit: str | None, rate: float | None, *, n_rows: int
 ) -> tuple[np.ndarray, str | None, list[str]]:
@@ -486,6 +505,7 @@ def prepare_channel(
     else:
         positions = np.arange(last - first)
     _check_constant_and_rail(values[window], relative, first, table.source, channel, resolved_unit)
+    notes.extend(_clipping_notes(values[window], resolved_unit))
     grid = np.full(int(positions[-1]) + 1, np.nan)
     grid[positions] = values[window]
     grid_temperature = None

@@ -104,8 +104,9 @@ DECISIVE_LOG_BAYES_FACTOR = math.log(100.0)
 AMBIGUOUS_LOG_BAYES_FACTOR = math.log(10.0)
 """A runner-up closer than this to the accepted term explains the mismatch about as well:
 the two are reported as indistinguishable on this recording."""
-UNMODELLED_CHECKS = ("timestamps",)
-"""Checks no model term answers: they are reported, but do not start a search."""
+UNMODELLED_CHECKS = ("timestamps", "rail")
+"""Checks no term of the search answers — the time stamps, and a rail, which the saturation
+scan decides before the search: they are reported, but do not start a search."""
 CHECK_LEVEL = 0.01
 """A check fails when its (Bonferroni-corrected) p-value is below this."""
 TIME_BLOCKS = 32
@@ -1231,7 +1232,7 @@ def discover(
     def decisive(scan):
         return scan if scan and scan["log_bayes_factor"] > DECISIVE_LOG_BAYES_FACTOR else None
 
-    saturation = decisive(saturation_scan(data.values, decisive=DECISIVE_LOG_BAYES_FACTOR))
+    saturation = decisive(saturation_scan(data.values))
     unclipped = (
         impute_clipped(data.values, saturation, np.random.default_rng(seed))
         if saturation

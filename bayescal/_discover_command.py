@@ -206,7 +206,9 @@ def discovery_result(result, posterior, *, baseline_terms, source: str, sim: dic
         "decision_rule": "a term is accepted when its Schwarz (BIC) log Bayes factor against "
         "the current model exceeds log(100) = 4.6 (decisive); delta_elpd is the AIC-penalised "
         "gain in log predictive density, pointwise over independent frequency bins of the "
-        "increments and one-block-ahead predictions of 128 block means, with its standard error",
+        "increments and one-block-ahead predictions of 128 block means, with its standard "
+        "error; saturation and outliers are decided first, on the samples' distribution "
+        "(censored and contaminated normal against the normal), at the same threshold",
     }
     still_failing = [
         check["name"]

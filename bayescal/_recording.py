@@ -22,6 +22,7 @@ import numba
 import numpy as np
 
 from ._errors import InputError
+from ._saturation import RAIL_SIGMAS, rail_check
 from ._units import parse_unit, unit_from_column_suffix
 
 _TIME_NAMES = ("time", "t", "timestamp")
@@ -35,7 +36,6 @@ _IRREGULAR_SHARE = 0.05
 _LAG_GAIN = 0.02
 MIN_SAMPLES = 16
 _RAIL_RUN = 5
-_RAIL_SIGMAS = 6.0
 
 
 @dataclass(frozen=True)
@@ -384,7 +384,7 @@ def _check_constant_and_rail(values, relative_time, offset, source, column, unit
     median = np.median(values)
     spread = 1.4826 * np.median(np.abs(values - median)) or np.std(values)
     for rail in (values.max(), values.min()):
-        if abs(rail - median) < _RAIL_SIGMAS * spread:
+        if abs(rail - median) <= RAIL_SIGMAS * spread:
             continue
         at_rail = np.concatenate(([0], (values == rail).astype(np.int8), [0]))
         edges = np.flatnonzero(np.diff(at_rail))
@@ -407,8 +407,6 @@ def _clipping_notes(values, unit) -> list[str]:
     clipped at the sensor's range, which biases a mean and a spread computed from them.
     Heavy tails on a coarse converter step can pile samples on the extreme too, so this is a
     note; discovery decides (:func:`bayescal._saturation.saturation_scan`)."""
-    from ._saturation import rail_check
-
     check = rail_check(values, 1.0, unit)
     if check["p_value"] >= 0.01:
         return []

@@ -23,30 +23,50 @@ from scipy import optimize, special, stats
 SIDES = ("upper", "lower")
 MIN_LEVELS = 5
 """Fewer distinct values than this: the converter's step hides any rail (and the spread)."""
+RAIL_SIGMAS = 6.0
+"""A pile farther than this many robust standard deviations from the median clips nothing of
+the noise: it is a disturbance beyond the range (the loader refuses a run of it) or repeated
+glitches (``outliers``), not saturation."""
 _END = {"upper": -1, "lower": 0}
 """Index of each side's extreme among the sorted levels."""
 
 
-def _log_bin(low, high):
-    """log(Phi(high) - Phi(low)) for standard scores low < high, accurate in either tail and
-    for bins far narrower than the spread."""
+def _log_bin(low, width):
+    """log(Phi(low + width) - Phi(low)) for standard scores, accurate in either tail and for
+    bins far narrower than the spread (the width passed as such: a difference of two scores
+    far from zero would lose it)."""
+    high = low + width
     upper_tail = low > 0
     a = np.where(upper_tail, -high, low)
     b = np.where(upper_tail, -low, high)
     log_b = special.log_ndtr(b)
     with np.errstate(divide="ignore", invalid="ignore"):
         exact = log_b + np.log1p(-np.exp(special.log_ndtr(a) - log_b))
-    narrow = stats.norm.logpdf(0.5 * (low + high)) + np.log(high - low)
-    return np.where(high - low < 1e-3, narrow, exact)
+    narrow = stats.norm.logpdf(low + 0.5 * width) + np.log(width)
+    return np.where(width < 1e-3, narrow, exact)
 
 
-def _rails(levels: np.ndarray, counts: np.ndarray) -> dict:
-    """side -> (rail value, samples on it) for each extreme that at least two samples share."""
-    out = {}
-    for side in SIDES:
-        if counts[_END[side]] >= 2:
-            out[side] = (float(levels[_END[side]]), int(counts[_END[side]]))
-    return out
+class _Levels:
+    """The distinct values of a record, how many samples sit on each, its resolution (the
+    least step between values: the converter's LSB or the printed precision) and the extremes
+    that at least two samples share within the noise."""
+
+    def __init__(self, values: np.ndarray):
+        finite = values[np.isfinite(values)]
+        self.levels, self.inverse, self.counts = np.unique(
+            finite, return_inverse=True, return_counts=True
+        )
+        self.n = finite.size
+        self.rails = {}
+        if self.levels.size < MIN_LEVELS:
+            return
+        self.step = float(np.min(np.diff(self.levels)))
+        median = np.median(finite)
+        spread = 1.4826 * np.median(np.abs(finite - median))
+        for side in SIDES:
+            rail, count = self.levels[_END[side]], self.counts[_END[side]]
+            if count >= 2 and abs(rail - median) <= RAIL_SIGMAS * spread:
+                self.rails[side] = (float(rail), int(count))
 
 
 def _rail_log_probability(side: str, rail, mean, sd, half_step):
@@ -56,17 +76,18 @@ def _rail_log_probability(side: str, rail, mean, sd, half_step):
     return special.log_ndtr((rail + half_step - mean) / sd)
 
 
-def _pointwise(levels, mean, sd, half_step, rails: dict) -> np.ndarray:
+def _pointwise(levels, mean, sd, half_step, rails) -> np.ndarray:
     """log probability of each level's bin under N(mean, sd), censored at ``rails``."""
-    out = _log_bin((levels - half_step - mean) / sd, (levels + half_step - mean) / sd)
+    out = _log_bin((levels - half_step - mean) / sd, 2 * half_step / sd)
     for side in rails:
         out[_END[side]] = _rail_log_probability(side, levels[_END[side]], mean, sd, half_step)
     return out
 
 
-def _fit(levels, counts, half_step, rails: dict) -> tuple[float, float, np.ndarray]:
-    """Maximum-likelihood mean and sd of the (censored) normal, and the log probability of
-    each level at them."""
+def _fit(record: _Levels, rails) -> tuple[float, float, np.ndarray]:
+    """Maximum-likelihood mean and sd of the normal censored at ``rails`` (sides), and the
+    log probability of each level at them."""
+    levels, counts, half_step = record.levels, record.counts, 0.5 * record.step
     inside = np.ones(levels.size, bool)
     inside[[_END[side] for side in rails]] = False
     weights = counts * inside
@@ -86,7 +107,7 @@ def _fit(levels, counts, half_step, rails: dict) -> tuple[float, float, np.ndarr
     else:
 
         def inside_rails(mean, sd):
-            return np.dot(weights, _pointwise(levels, mean, sd, half_step, {}))
+            return np.dot(weights, _pointwise(levels, mean, sd, half_step, ()))
 
     def objective(x):
         mean, sd = mean0 + x[0] * sd0, sd0 * math.exp(x[1])
@@ -104,54 +125,53 @@ def _fit(levels, counts, half_step, rails: dict) -> tuple[float, float, np.ndarr
     return float(mean), float(sd), _pointwise(levels, mean, sd, half_step, rails)
 
 
-def saturation_scan(values: np.ndarray, *, decisive: float) -> dict | None:
-    """Censored normal against normal on the samples' marginal distribution: the log Bayes
-    factor (each rail paying the log of the number of levels it could have sat on), the ELPD
-    gain (AIC: one parameter per rail) with its standard error, the rails (those whose log
-    Bayes factor alone exceeds ``decisive``, else every candidate: together they may), and
-    the unclipped mean and sd. ``None`` when no extreme value is shared by two samples."""
-    finite = values[np.isfinite(values)]
-    levels, inverse, counts = np.unique(finite, return_inverse=True, return_counts=True)
-    candidates = _rails(levels, counts) if levels.size >= MIN_LEVELS else {}
-    if not candidates:
+def saturation_scan(values: np.ndarray) -> dict | None:
+    """Censored normal against normal on the samples' marginal distribution, with a rail on
+    each side whose own log Bayes factor is positive (else the better side alone): the log
+    Bayes factor (each rail paying the log of the number of levels it could have sat on),
+    the ELPD gain (AIC: one parameter per rail) with its standard error, the rails, the
+    unclipped mean and sd, and the resolution. ``None`` when no extreme within the noise is
+    shared by two samples."""
+    record = _Levels(values)
+    if not record.rails:
         return None
-    step = float(np.min(np.diff(levels)))
-    half_step = 0.5 * step
-    rail_cost = math.log(np.ptp(levels) / step + 1)
-    normal = _fit(levels, counts, half_step, {})[2]
+    rail_cost = math.log(np.ptp(record.levels) / record.step + 1)
+    normal = _fit(record, ())[2]
 
-    def log_bayes_factor(rails):
-        return (
-            np.dot(counts, _fit(levels, counts, half_step, rails)[2] - normal)
-            - len(rails) * rail_cost
-        )
+    def log_bayes_factor(sides):
+        return np.dot(record.counts, _fit(record, sides)[2] - normal) - len(sides) * rail_cost
 
-    kept = {
-        side: rail for side, rail in candidates.items() if log_bayes_factor({side: rail}) > decisive
-    }
-    rails = kept or candidates
-    mean, sd, censored = _fit(levels, counts, half_step, rails)
-    difference = (censored - normal)[inverse]
+    own = {side: log_bayes_factor((side,)) for side in record.rails}
+    sides = tuple(side for side in own if own[side] > 0) or (max(own, key=own.get),)
+    mean, sd, censored = _fit(record, sides)
+    gain = np.dot(record.counts, censored - normal)
+    difference = (censored - normal)[record.inverse]
     return {
-        "log_bayes_factor": float(difference.sum() - len(rails) * rail_cost),
-        "delta_elpd": float(difference.sum() - len(rails)),
-        "delta_elpd_se": float(math.sqrt(difference.size) * np.std(difference)),
-        "rails": {side: {"value": rail, "samples": count} for side, (rail, count) in rails.items()},
+        "log_bayes_factor": float(gain - len(sides) * rail_cost),
+        "delta_elpd": float(gain - len(sides)),
+        "delta_elpd_se": float(math.sqrt(record.n) * np.std(difference)),
+        "rails": {
+            side: {"value": record.rails[side][0], "samples": record.rails[side][1]}
+            for side in sides
+        },
         "mean": mean,
         "sd": sd,
+        "step": record.step,
     }
 
 
 def impute_clipped(values: np.ndarray, scan: dict, rng: np.random.Generator) -> np.ndarray:
-    """The clipped samples replaced by draws from the fitted normal beyond their rail (one
-    imputation, seeded): what the sensor would have read with a wider range, as far as the
-    record can tell."""
+    """The clipped samples replaced by draws from the fitted normal beyond their rail's bin
+    (one imputation, seeded), put on the record's grid of levels: what the sensor would have
+    read with a wider range, as far as the record can tell."""
     out = values.copy()
+    step = scan["step"]
     for side, rail in scan["rails"].items():
         at_rail = values == rail["value"]
-        edge = (rail["value"] - scan["mean"]) / scan["sd"]
+        sign = 1 if side == "upper" else -1
+        edge = (rail["value"] - sign * 0.5 * step - scan["mean"]) / scan["sd"]
         low, high = (edge, np.inf) if side == "upper" else (-np.inf, edge)
-        out[at_rail] = stats.truncnorm.rvs(
+        draws = stats.truncnorm.rvs(
             low,
             high,
             loc=scan["mean"],
@@ -159,26 +179,23 @@ def impute_clipped(values: np.ndarray, scan: dict, rng: np.random.Generator) -> 
             size=int(at_rail.sum()),
             random_state=rng,
         )
+        out[at_rail] = rail["value"] + np.round((draws - rail["value"]) / step) * step
     return out
 
 
 def rail_check(values: np.ndarray, rate_hz: float, unit: str) -> dict:
-    """Samples stuck on an extreme value against the normal with the record's mean and sd:
-    the chance that as many others share the extreme's resolution bin, for either side
-    (Bonferroni). With fine resolution, two samples on the extreme are already improbable; on
-    a coarse converter step the top level holds a few anyway."""
-    finite = values[np.isfinite(values)]
-    levels, counts = np.unique(finite, return_counts=True)
-    candidates = _rails(levels, counts) if levels.size >= MIN_LEVELS else {}
+    """Samples stuck on an extreme value within the noise, against the normal with the
+    record's mean and sd: the chance that as many others share the extreme's resolution bin,
+    for either side (Bonferroni). With fine resolution, two samples on the extreme are
+    already improbable; on a coarse converter step the top level holds a few anyway."""
+    record = _Levels(values)
     worst = {"name": "rail", "statistic": 1, "p_value": 1.0, "location": {}}
-    if not candidates:
-        return worst
-    step = float(np.min(np.diff(levels)))
+    finite = values[np.isfinite(values)]
     mean, sd = float(np.mean(finite)), float(np.std(finite))
-    for side, (rail, count) in candidates.items():
-        low, high = (rail - 0.5 * step - mean) / sd, (rail + 0.5 * step - mean) / sd
-        in_bin = float(np.exp(_log_bin(np.array(low), np.array(high))))
-        p_value = min(1.0, len(SIDES) * stats.binom.sf(count - 2, finite.size - 1, in_bin))
+    for side, (rail, count) in record.rails.items():
+        low = (rail - 0.5 * record.step - mean) / sd
+        in_bin = float(np.exp(_log_bin(np.array(low), record.step / sd)))
+        p_value = min(1.0, len(SIDES) * stats.binom.sf(count - 2, record.n - 1, in_bin))
         if p_value <= worst["p_value"]:
             where = np.flatnonzero(values == rail)
             worst["statistic"], worst["p_value"] = count, float(p_value)
@@ -187,7 +204,7 @@ def rail_check(values: np.ndarray, rate_hz: float, unit: str) -> dict:
                 "rail": rail,
                 "unit": unit,
                 "samples": count,
-                "fraction": count / finite.size,
+                "fraction": count / record.n,
                 "first_s": float(where[0] / rate_hz),
                 "last_s": float(where[-1] / rate_hz),
             }

@@ -59,7 +59,31 @@ def diagnostics(result) -> dict:
             "unit": result.data.unit,
             "temperature_unit": result.data.temperature_unit,
         }
+    if result.saturation:
+        out["distribution"] = _distribution(result)
     return out
+
+
+def _distribution(result) -> dict:
+    """Histogram of the samples as recorded and with the clipped ones imputed, on common bins,
+    with the counts the fitted unclipped normal expects and the rails."""
+    import numpy as np
+    from scipy import stats
+
+    recorded, unclipped = result.data.values, result.final.clean
+    finite = unclipped[np.isfinite(unclipped)]
+    edges = np.linspace(finite.min(), finite.max(), 61)
+    expected = finite.size * np.diff(
+        stats.norm.cdf(edges, result.saturation["mean"], result.saturation["sd"])
+    )
+    return {
+        "edges": edges.tolist(),
+        "recorded": np.histogram(recorded[np.isfinite(recorded)], edges)[0].tolist(),
+        "unclipped": np.histogram(finite, edges)[0].tolist(),
+        "expected": expected.tolist(),
+        "rails": [rail["value"] for rail in result.saturation["rails"].values()],
+        "unit": result.data.unit,
+    }
 
 
 def _figures(curves: dict, channel: str) -> dict:
@@ -155,6 +179,27 @@ def _figures(curves: dict, channel: str) -> dict:
         )
         axis.legend(fontsize=8)
         figures["residual_temperature"] = figure
+
+    if "distribution" in curves:
+        distribution = curves["distribution"]
+        edges = distribution["edges"]
+        figure, axis = plt.subplots(figsize=(6.4, 4.2))
+        axis.stairs(distribution["recorded"], edges, color="tab:red", label="as recorded")
+        axis.stairs(
+            distribution["unclipped"], edges, color="tab:blue", label="clipped samples imputed"
+        )
+        axis.stairs(distribution["expected"], edges, color="k", ls="--", label="unclipped normal")
+        for rail in distribution["rails"]:
+            axis.axvline(rail, color="0.4", lw=0.8)
+        axis.set(
+            yscale="log",
+            ylim=(0.5, None),
+            xlabel=f"sample value [{distribution['unit']}] (rail: grey line)",
+            ylabel="samples per bin",
+            title=f"{channel}: distribution at the rail",
+        )
+        axis.legend(fontsize=8)
+        figures["distribution"] = figure
     return figures
 
 

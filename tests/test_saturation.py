@@ -121,9 +121,9 @@ def test_cli_reports_the_rail_and_the_unclipped_mean(run_cli, tmp_path):
         comments="",
         fmt="%.6f",
     )
-    output = tmp_path / "findings.json"
+    output, folder = tmp_path / "findings.json", tmp_path / "report"
     code, stdout, stderr = run_cli(
-        "discover", path, "--channel", "gyro_z", "--json", output, "--quiet"
+        "discover", path, "--channel", "gyro_z", "--json", output, "--out", folder, "--quiet"
     )
     assert code == 0, stderr
     document = json.loads(output.read_text())
@@ -137,6 +137,7 @@ def test_cli_reports_the_rail_and_the_unclipped_mean(run_cli, tmp_path):
     white = document["posterior"]["parameters"]["N"]
     assert white["q05"] < sd / math.sqrt(rate) < white["q95"]
     assert "upper rail 247 deg/s" in stdout and "unclipped mean" in stdout
+    assert (folder / "discover_gyro_z_distribution.png").stat().st_size > 1000
     # Every command that reads the channel is told (a mean of it would be biased).
     notes = prepare_channel(load_table(path), "gyro_z").notes
     assert any("clipped" in note and "247 deg/s" in note for note in notes)

@@ -13,6 +13,9 @@ The rail is not known beforehand: its prior is uniform over as many levels above
 record's extreme as the record spans. A rail above the extreme clips nothing and explains the
 data as the normal does, so the Bayes factor is the likelihood ratio at the extreme divided by
 that number of levels (the log of which each rail pays).
+
+The censored normal describes the samples around one level, as in a static record: a rail
+reached only during a drift excursion is imputed from the record's level, not the local one.
 """
 
 import math

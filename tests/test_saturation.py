@@ -94,7 +94,7 @@ def test_repeated_glitches_far_outside_the_noise_are_not_a_rail():
 
 
 def test_discovery_names_a_rail_concealed_in_the_noise_tail():
-    """A rail 3 sd above the bias clips 0.13 % of the samples (about 19 of 14 400): invisible
+    """A rail 3 sd above the bias clips 0.13 % of the samples (16 of 14 400 in this draw): invisible
     in a plot, named, nothing else added, the spread recovered."""
     rng = np.random.default_rng(11)
     values = np.minimum(0.1 + 0.05 * rng.standard_normal(14_400), 0.1 + 3 * 0.05)

@@ -3,17 +3,7 @@ argument), where the problem is, and what to do; and writes no output."""
 
 import numpy as np
 import pytest
-
-
-def write_csv(path, columns: dict, header: list[str] | None = None):
-    names = header or list(columns)
-    rows = np.column_stack(list(columns.values()))
-    lines = [",".join(names)] + [
-        ",".join(f"{value!r}" if not isinstance(value, str) else value for value in row)
-        for row in rows.tolist()
-    ]
-    path.write_text("\n".join(lines) + "\n")
-    return path
+from recording_files import write_csv
 
 
 @pytest.fixture

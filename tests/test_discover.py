@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from recording_files import write_csv
 from scipy import stats
 from scipy.signal import lfilter
 
@@ -140,13 +141,9 @@ def test_gauss_markov_shapes_agree_with_each_other():
 def test_cli_contract_and_outputs(run_cli, tmp_path):
     t, values, profile, _ = _record(4, temperature=True)
     values = values + 0.3 * WHITE_SD * np.exp(-t / 90)
-    path = tmp_path / "rec.csv"
-    np.savetxt(
-        path,
-        np.column_stack([t, values, profile]),
-        delimiter=",",
-        header="time,gyro_x[deg/s],temperature",
-        comments="",
+    path = write_csv(
+        tmp_path / "rec.csv",
+        {"time": t, "gyro_x[deg/s]": values, "temperature": profile},
         fmt="%.8g",
     )
     output, folder = tmp_path / "findings.json", tmp_path / "report"
@@ -180,15 +177,7 @@ def test_cli_contract_and_outputs(run_cli, tmp_path):
 
 def test_bad_input_is_refused_with_exit_2(run_cli, tmp_path):
     t, values, _, _ = _record(5)
-    path = tmp_path / "rec.csv"
-    np.savetxt(
-        path,
-        np.column_stack([t, values]),
-        delimiter=",",
-        header="time,gyro_x",
-        comments="",
-        fmt="%.8g",
-    )
+    path = write_csv(tmp_path / "rec.csv", {"time": t, "gyro_x": values}, fmt="%.8g")
     output = tmp_path / "out.json"
     code, _, stderr = run_cli(
         "discover", path, "--channel", "gyro_x", "--baseline", "pink", "--json", output

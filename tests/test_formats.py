@@ -7,6 +7,7 @@ import re
 
 import numpy as np
 import pytest
+from recording_files import write_csv
 
 yaml = pytest.importorskip("yaml")  # PyYAML, which Kalibr reads its imu.yaml with
 pytest.importorskip("rosbags")
@@ -74,15 +75,6 @@ def write_bag(path, topics, *, kind="ros2", zero_stamps=False, frame_ids=None, s
                 frame_id = frame_ids[k % len(frame_ids)] if frame_ids else "imu_link"
                 message = _imu_message(store, ros1, k, gyro[k], acc[k], stamp, frame_id)
                 writer.write(connection, received, serialize(message, imu_type))
-    return path
-
-
-def write_csv(path, columns):
-    names = list(columns)
-    rows = zip(*(np.asarray(columns[name]).tolist() for name in names), strict=True)
-    path.write_text(
-        ",".join(names) + "\n" + "\n".join(",".join(repr(v) for v in row) for row in rows)
-    )
     return path
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from recording_files import write_csv
 from scipy import stats
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
@@ -298,16 +299,10 @@ def write_session(path, directions, truth=FREE_TRUTH, rate=100.0, dwell_s=3.0, t
     matrix = np.array([[1, -a_yz, a_zy], [0, 1, -a_zx], [0, 0, 1]]) * truth[:3]
     counts = np.linalg.solve(matrix, GRAVITY.value * body.T).T + truth[6:9]
     counts += 3.3 * rng.standard_normal(counts.shape)
-    table = np.column_stack([np.arange(counts.shape[0]) / rate, counts])
-    np.savetxt(
-        path,
-        table,
-        delimiter=",",
-        fmt="%.5f",
-        comments="",
-        header="time,acc_x[LSB],acc_y[LSB],acc_z[LSB]",
-    )
-    return path
+    time = np.arange(counts.shape[0]) / rate
+    x, y, z = counts.T
+    columns = {"time": time, "acc_x[LSB]": x, "acc_y[LSB]": y, "acc_z[LSB]": z}
+    return write_csv(path, columns, fmt="%.5f")
 
 
 def test_command_line_json_contract(run_cli, tmp_path):
@@ -411,11 +406,11 @@ def test_bad_input(run_cli, tmp_path):
         [few, *channels, "--orientations", "six-face"],
         "found 5 still pose(s); a six-face calibration needs all six",
     )
-    in_g = tmp_path / "in_g.csv"
     directions = random_directions(rng, 12)
     readings = np.repeat(directions, 300, axis=0) + 0.001 * rng.standard_normal((12 * 300, 3))
-    table = np.column_stack([np.arange(12 * 300) / 100, readings])
-    np.savetxt(in_g, table, delimiter=",", comments="", header="time,acc_x,acc_y,acc_z")
+    x, y, z = readings.T
+    columns = {"time": np.arange(12 * 300) / 100, "acc_x": x, "acc_y": y, "acc_z": z}
+    in_g = write_csv(tmp_path / "in_g.csv", columns)
     assert_refused(
         run_cli,
         tmp_path,

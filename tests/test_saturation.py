@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from recording_files import write_csv
 
 from bayescal._discover import DECISIVE_LOG_BAYES_FACTOR, DiscoveryData, discover, discrete_step
 from bayescal._recording import load_table, prepare_channel
@@ -112,14 +113,8 @@ def test_cli_reports_the_rail_and_the_unclipped_mean(run_cli, tmp_path):
     and the white noise's posterior covers its true value."""
     rate, n, mean, sd, rail = 50.0, 30_000, 245.0, 2.0, 247.0
     values = np.minimum(mean + sd * np.random.default_rng(5).standard_normal(n), rail)
-    path = tmp_path / "table.csv"
-    np.savetxt(
-        path,
-        np.column_stack([np.arange(n) / rate, values]),
-        delimiter=",",
-        header="time,gyro_z[deg/s]",
-        comments="",
-        fmt="%.6f",
+    path = write_csv(
+        tmp_path / "table.csv", {"time": np.arange(n) / rate, "gyro_z[deg/s]": values}, fmt="%.6f"
     )
     output, folder = tmp_path / "findings.json", tmp_path / "report"
     code, stdout, stderr = run_cli(

@@ -6,6 +6,7 @@ import json
 import jax
 import numpy as np
 import pytest
+from recording_files import write_csv
 
 import bayescal as bc
 from bayescal._noise_fit import NoisePrior
@@ -103,22 +104,17 @@ def test_update_with_white_noise_matches_the_closed_form():
     np.testing.assert_allclose(draws_sd, sd, rtol=0.1)
 
 
-def write(path, columns, header):
-    np.savetxt(
-        path, np.column_stack(columns), delimiter=",", header=header, comments="", fmt="%.7f"
-    )
-    return path
+def write_recording(path, values, temperature):
+    time = np.arange(values.size) / RATE
+    columns = {"time": time, "gyro_z[deg/s]": values, "temperature": temperature}
+    return write_csv(path, columns, fmt="%.7f")
 
 
 @pytest.fixture(scope="module")
 def calibration(tmp_path_factory):
     folder = tmp_path_factory.mktemp("thermal")
     values, temperature = warm_up(4, n=2**13, walk=1e-4)
-    recording = write(
-        folder / "warmup.csv",
-        [np.arange(values.size) / RATE, values, temperature],
-        "time,gyro_z[deg/s],temperature",
-    )
+    recording = write_recording(folder / "warmup.csv", values, temperature)
     return folder, recording
 
 
@@ -171,12 +167,8 @@ def test_bad_input(run_cli, calibration, tmp_path):
     folder, recording = calibration
     values, _temperature = warm_up(5, n=2000)
     time = np.arange(values.size) / RATE
-    no_temperature = write(tmp_path / "a.csv", [time, values], "time,gyro_z[deg/s]")
-    constant = write(
-        tmp_path / "b.csv",
-        [time, values, np.full(values.size, 25.0)],
-        "time,gyro_z[deg/s],temperature",
-    )
+    no_temperature = write_csv(tmp_path / "a.csv", {"time": time, "gyro_z[deg/s]": values})
+    constant = write_recording(tmp_path / "b.csv", values, np.full(values.size, 25.0))
     code, _, stderr = run_cli(
         "thermal", "fit", no_temperature, "--channel", "gyro_z", "--json", tmp_path / "o.json"
     )
@@ -230,11 +222,7 @@ def test_bad_input(run_cli, calibration, tmp_path):
     )
     assert code == 2 and "calibration is in deg/s but the channel is in rad/s" in stderr
 
-    hot = write(
-        tmp_path / "hot.csv",
-        [time, values, np.linspace(50, 60, values.size)],
-        "time,gyro_z[deg/s],temperature",
-    )
+    hot = write_recording(tmp_path / "hot.csv", values, np.linspace(50, 60, values.size))
     code, _, stderr = run_cli(
         "thermal",
         "compensate",
@@ -357,11 +345,7 @@ def test_update_of_an_aged_sensor_covers_the_truth(run_cli, tmp_path):
             periods.append(f"{120 * p}:{120 * (p + 1)}")
             measured.append(f"{offset + rng.normal(0, 0.001):.6f}±0.001")
         values, temperature = np.concatenate(values), np.concatenate(temperature)
-        recording = write(
-            tmp_path / f"field{seed}.csv",
-            [np.arange(values.size) / RATE, values, temperature],
-            "time,gyro_z[deg/s],temperature",
-        )
+        recording = write_recording(tmp_path / f"field{seed}.csv", values, temperature)
         updated = tmp_path / f"new{seed}.json"
         code, _, stderr = run_cli(
             "thermal",

@@ -8,6 +8,7 @@ import math
 import jax
 import numpy as np
 import pytest
+from recording_files import write_csv
 from scipy import stats
 
 import bayescal as bc
@@ -109,17 +110,9 @@ def session(tmp_path):
         [0.01 * rng.standard_normal(6000), G * np.sin(turn), 0.01 * rng.standard_normal(6000)]
     )
     y = 0.01 * rng.standard_normal(z.size)
-    path = tmp_path / "session.csv"
     rows = np.column_stack([np.arange(z.size) / RATE, x, y, z])
-    np.savetxt(
-        path,
-        rows,
-        delimiter=",",
-        fmt="%.7f",
-        comments="",
-        header="time,acc_x[m/s^2],acc_y[m/s^2],acc_z[m/s^2]",
-    )
-    return path, rows
+    columns = {"time": rows[:, 0], "acc_x[m/s^2]": x, "acc_y[m/s^2]": y, "acc_z[m/s^2]": z}
+    return write_csv(tmp_path / "session.csv", columns, fmt="%.7f"), rows
 
 
 def test_one_file_sections_are_found_and_reported(run_cli, tmp_path, session):
@@ -176,15 +169,8 @@ def test_bayesian_json_contract(run_cli, tmp_path, session):
 
 
 def write_section(path, values):
-    np.savetxt(
-        path,
-        np.column_stack([np.arange(values.size) / RATE, values]),
-        delimiter=",",
-        fmt="%.7f",
-        comments="",
-        header="time,acc_z[m/s^2]",
-    )
-    return path
+    time = np.arange(values.size) / RATE
+    return write_csv(path, {"time": time, "acc_z[m/s^2]": values}, fmt="%.7f")
 
 
 def test_bad_input(run_cli, tmp_path):

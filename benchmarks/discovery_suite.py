@@ -15,7 +15,16 @@ the log Bayes factor the recording can be expected to hold for it, computed from
 alone before discovery runs (:func:`expected_log_bayes_factors`); the naming rate is printed
 against it, and over the effects above the detection limit (expected log BF >= log 100).
 
-    python benchmarks/discovery_suite.py [--recordings 32] [--seed 0] [--workers 2]
+The issue's target (every effect named in at least 95 % of recordings, no false alarm, the
+90 % intervals at their rate) is judged over the effects above that limit: the decision rule
+accepts a term only on decisive evidence, so one the recording is not expected to hold
+decisive evidence for is, by that rule, unnameable in most draws. The verdict lines give
+exact binomial (Clopper-Pearson) bounds, so that a run of a few dozen recordings is not
+read as more than it shows.
+
+    python benchmarks/discovery_suite.py [--recordings 32] [--seed 0 [1 ...]] [--workers 2]
+
+Several seeds pool their recordings (32 per seed by default) into one report.
 """
 
 import argparse
@@ -243,7 +252,7 @@ def expected_log_bayes_factors(truth, rate, n, temperature) -> dict:
 
 
 def run_one(arguments):
-    index, hidden, seed = arguments
+    label, hidden, seed = arguments
     import jax
 
     jax.config.update("jax_enable_x64", True)
@@ -278,7 +287,7 @@ def run_one(arguments):
                     summary["q05"] <= true_value <= summary["q95"]
                 )
     return {
-        "index": index,
+        "label": label,
         "hidden": [h for h in hidden if h != "clean_temperature"],
         "clean_temperature": "clean_temperature" in hidden,
         "found": found,
@@ -354,31 +363,87 @@ def missed_table(results) -> list[str]:
     return lines if len(lines) > 1 else []
 
 
+def _binomial_bounds(successes: int, trials: int, level: float) -> tuple[float, float]:
+    """Exact (Clopper-Pearson) one-sided ``level`` lower and upper bounds of a binomial rate."""
+    alpha = 1 - level
+    lower = stats.beta.ppf(alpha, successes, trials - successes + 1) if successes else 0.0
+    upper = stats.beta.isf(alpha, successes + 1, trials - successes) if successes < trials else 1.0
+    return float(lower), float(upper)
+
+
+def target_verdict(results) -> list[str]:
+    """The issue's three targets, over the effects above the detection limit, each with exact
+    binomial bounds: 'shown' when the one-sided 95 % bound clears the target, 'missed' when
+    it falls short of it, otherwise 'consistent' (too few recordings to tell)."""
+    limit = math.log(100)
+    named = [
+        effect in result["found"]
+        for result in results
+        for effect, value in result["expected"].items()
+        if value >= limit
+    ]
+    controls = [bool(result["found"]) for result in results if not result["hidden"]]
+    covered = [
+        inside
+        for result in results
+        for name, inside in result["covered"].items()
+        if result["expected"][name.split(".")[0]] >= limit
+    ]
+    lines = ["\ntargets, over the effects above the detection limit (exact 95 % bounds):"]
+    if named:
+        lower, upper = _binomial_bounds(sum(named), len(named), 0.95)
+        verdict = "shown" if lower >= 0.95 else "missed" if upper < 0.95 else "consistent"
+        lines.append(
+            f"  named in >= 95 %: {sum(named)}/{len(named)}, lower bound {lower:.3f}, "
+            f"upper {upper:.3f}: {verdict}"
+        )
+    if controls:
+        _, upper = _binomial_bounds(sum(controls), len(controls), 0.95)
+        verdict = "met" if not any(controls) else "missed"
+        lines.append(
+            f"  no false alarm: {sum(controls)}/{len(controls)} clean controls alarmed "
+            f"(rate below {upper:.3f}): {verdict}"
+        )
+    if covered:
+        lower, upper = _binomial_bounds(sum(covered), len(covered), 0.975)
+        verdict = "at the stated rate" if lower <= 0.90 <= upper else "off the stated rate"
+        lines.append(
+            f"  90 % intervals cover: {sum(covered)}/{len(covered)} "
+            f"({sum(covered) / len(covered):.3f}, two-sided 95 % [{lower:.3f}, {upper:.3f}]): "
+            f"{verdict}"
+        )
+    return lines
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--recordings", type=int, default=32)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, nargs="+", default=[0])
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
-    rng = np.random.default_rng(args.seed)
-    plans = plan(args.recordings, rng)
-    jobs = [(i, hidden, args.seed * 1000 + i) for i, hidden in enumerate(plans)]
+    jobs = [
+        (f"{seed}#{i:02d}", hidden, seed * 1000 + i)
+        for seed in args.seed
+        for i, hidden in enumerate(plan(args.recordings, np.random.default_rng(seed)))
+    ]
+    order = {job[0]: position for position, job in enumerate(jobs)}
     started = time.perf_counter()
     with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
         results = []
         for result in pool.imap_unordered(run_one, jobs):
             results.append(result)
             print(
-                f"  #{result['index']:02d} {result['n'] / result['rate'] / 60:5.0f} min "
+                f"  {result['label']:>5} {result['n'] / result['rate'] / 60:5.0f} min "
                 f"{result['rate']:4.0f} Hz  hidden {','.join(result['hidden']) or '-':<36} "
                 f"found {','.join(result['found']) or '-':<36} {result['seconds']:6.1f} s  "
                 f"expected log BF {_expected_text(result['expected'])}",
                 flush=True,
             )
-    results.sort(key=lambda r: r["index"])
+    results.sort(key=lambda r: order[r["label"]])
     wall = time.perf_counter() - started
 
-    print(f"\ndiscovery suite: {len(results)} recordings, {wall:.0f} s wall")
+    seeds = " ".join(map(str, args.seed))
+    print(f"\ndiscovery suite: {len(results)} recordings (seed {seeds}), {wall:.0f} s wall")
     named, present = Counter(), Counter()
     confusion = {effect: Counter() for effect in EFFECTS}
     exact = 0
@@ -438,6 +503,7 @@ def main() -> int:
     print(f"posteriors failing a health check: {sum(not r['health'] for r in results)}")
     seconds = [r["seconds"] for r in results]
     print(f"time per recording: median {np.median(seconds):.1f} s, max {max(seconds):.1f} s")
+    print("\n".join(target_verdict(results)))
     return 0
 
 

@@ -1,17 +1,73 @@
-"""bayescal: Bayesian uncertainty quantification of inertial sensors."""
+"""bayescal: Bayesian uncertainty quantification of inertial sensors.
 
-import jax
+The public names, loaded on first use (Scientific Python SPEC 1, lazy loading): ``import
+bayescal`` costs nothing, and a name pulls in only what it needs — the command line answers
+``--help`` without importing JAX. The package is layered, each layer importing only those
+before it: recording -> classical -> models -> inference -> capabilities -> report -> cli.
+"""
 
-jax.config.update("jax_enable_x64", True)
+import importlib
 
-from ._allan import DeviationResult as DeviationResult  # noqa: E402
-from ._allan import allan_deviation as allan_deviation  # noqa: E402
-from ._allan import hadamard_deviation as hadamard_deviation  # noqa: E402
-from ._allan import modified_allan_deviation as modified_allan_deviation  # noqa: E402
-from ._classical import student_t_interval as student_t_interval  # noqa: E402
-from ._edf import deviation_interval as deviation_interval  # noqa: E402
-from ._edf import equivalent_degrees_of_freedom as equivalent_degrees_of_freedom  # noqa: E402
-from ._edf import identify_noise_exponent as identify_noise_exponent  # noqa: E402
-from ._errors import BayescalError as BayescalError  # noqa: E402
-from ._errors import HealthCheckError as HealthCheckError  # noqa: E402
-from ._errors import InputError as InputError  # noqa: E402
+_EXPORTS = {
+    # errors
+    "BayescalError": "_errors",
+    "InputError": "_errors",
+    "HealthCheckError": "_errors",
+    # recordings
+    "load_recording": "recording._recording",
+    "Recording": "recording._recording",
+    "Channel": "recording._recording",
+    "find_pad_window": "recording._pad",
+    "PadWindow": "recording._pad",
+    "find_static_sections": "recording._sections",
+    "StaticSection": "recording._sections",
+    "sensor_cards": "recording._sensor_cards",
+    "find_card": "recording._sensor_cards",
+    "SensorCard": "recording._sensor_cards",
+    # classical estimators
+    "allan_deviation": "classical._allan",
+    "modified_allan_deviation": "classical._allan",
+    "hadamard_deviation": "classical._allan",
+    "DeviationResult": "classical._allan",
+    "deviation_interval": "classical._edf",
+    "equivalent_degrees_of_freedom": "classical._edf",
+    "identify_noise_exponent": "classical._edf",
+    "student_t_interval": "classical._noise",
+    "classical_noise": "classical._noise",
+    "ClassicalNoise": "classical._noise",
+    "SlopeReading": "classical._noise",
+    "local_gravity": "classical._gravity",
+    "LocalGravity": "classical._gravity",
+    "Section": "classical._two_position",
+    "Poses": "classical._multi_position",
+    # models
+    "NoiseModel": "models._noise_model",
+    # capabilities
+    "fit_noise": "capabilities._noise",
+    "NoiseFit": "capabilities._noise",
+    "calibrate_two_position": "capabilities._two_position",
+    "TwoPositionCalibration": "capabilities._two_position",
+    "calibrate_multi_position": "capabilities._multi_position",
+    "MultiPositionCalibration": "capabilities._multi_position",
+    "fit_thermal": "capabilities._thermal",
+    "ThermalCalibration": "capabilities._thermal",
+    "load_thermal_calibration": "capabilities._thermal",
+    "discover": "capabilities._discovery",
+    "Discovery": "capabilities._discovery",
+    "FoundEffect": "capabilities._discovery",
+    "CheckResult": "capabilities._discovery",
+}
+
+__all__ = sorted(_EXPORTS)  # noqa: PLE0605 (the one table above lists the public names)
+
+
+def __getattr__(name: str):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'bayescal' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return __all__

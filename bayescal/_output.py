@@ -1,5 +1,12 @@
-"""Writing results: JSON with units beside numbers, written atomically."""
+"""Writing results: JSON with units beside numbers, and every file written atomically.
 
+One writer for every file bayescal writes (:func:`atomic_path`): the content goes to a
+temporary file beside the target, which replaces the target only once it is complete — a
+failed or interrupted write leaves no partial file — with the mode the umask allows (a
+temporary file is private, a result is made to be shared).
+"""
+
+import contextlib
 import json
 import math
 import os
@@ -44,18 +51,61 @@ def check_writable(path: str | os.PathLike, argument: str) -> Path:
     return target
 
 
-def write_atomic(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` so that a failure leaves no partial file."""
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike):
+    """A temporary path beside ``path`` to write to; it replaces ``path`` when the block
+    ends without an error, and is removed when it does not."""
     target = Path(path)
-    descriptor, temporary = tempfile.mkstemp(dir=target.parent or ".", prefix=f".{target.name}.")
+    descriptor, temporary = tempfile.mkstemp(
+        dir=target.parent if str(target.parent) else ".",
+        prefix=f".{target.name}.",
+        suffix=target.suffix,
+    )
+    os.close(descriptor)
     try:
-        with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
-            handle.write(text)
+        yield Path(temporary)
+        os.chmod(temporary, 0o666 & ~_umask())
         os.replace(temporary, target)
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
         raise
 
 
+def write_atomic(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` to ``path`` so that a failure leaves no partial file."""
+    with atomic_path(path) as temporary:
+        temporary.write_text(text, encoding="utf-8")
+
+
 def write_json(path: str | os.PathLike, result: dict) -> None:
+    """Write ``result`` as JSON (non-finite numbers as null), atomically."""
     write_atomic(path, json.dumps(to_jsonable(result), indent=1, ensure_ascii=False) + "\n")
+
+
+def write_netcdf(tree, path: str | os.PathLike) -> None:
+    """Write an ArviZ DataTree as netCDF (h5netcdf), atomically."""
+    with atomic_path(path) as temporary:
+        tree.to_netcdf(temporary, engine="h5netcdf")
+
+
+def write_csv(path: str | os.PathLike, columns: dict) -> None:
+    """A CSV file with one header row (the names as given, units in brackets where they
+    carry them), every float written so that it reads back exactly; atomically."""
+    import csv
+    import io
+
+    import pyarrow as pa
+    import pyarrow.csv as pa_csv
+
+    header = io.StringIO()
+    csv.writer(header, lineterminator="\n").writerow(columns)  # quotes a name only if needed
+    options = pa_csv.WriteOptions(include_header=False, quoting_style="needed")
+    with atomic_path(path) as temporary, open(temporary, "wb") as handle:
+        handle.write(header.getvalue().encode("utf-8"))
+        pa_csv.write_csv(pa.table(list(columns.values()), names=list(columns)), handle, options)

@@ -21,7 +21,7 @@ def shared_data() -> Path:
 @pytest.fixture
 def run_cli(capsys):
     """Run ``bayescal`` in-process; returns (exit code, stdout, stderr)."""
-    from bayescal._cli import main
+    from bayescal.cli import main
 
     def run(*argv):
         try:

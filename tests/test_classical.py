@@ -1,25 +1,21 @@
 """Classical numbers of a static channel: slope readings and the Student-t check, on
 simulations with known parameters."""
 
-import jax
 import numpy as np
 import pytest
 
-from bayescal._classical import classical_noise, student_t_interval
-from bayescal._noise_model import NoiseModel
+import bayescal as bc
 
 RATE = 100.0
 
 
 def simulate(seed, n, **parameters):
-    return np.asarray(
-        NoiseModel(rate_hz=RATE, bias=0.5, **parameters).simulate(jax.random.PRNGKey(seed), n)
-    )
+    return bc.NoiseModel(rate_hz=RATE, bias=0.5, **parameters).simulate(n, seed=seed)
 
 
 def test_white_noise_readings_and_valid_interval():
     y = simulate(1, 2**18, N=0.004)
-    result = classical_noise(y, RATE)
+    result = bc.classical_noise(y, RATE)
     n = result.slope_readings["N"]
     assert n.kind == "reading" and n.ci_low < 0.004 < n.ci_high
     assert result.slope_readings["K"].kind == "upper_bound"
@@ -30,7 +26,7 @@ def test_white_noise_readings_and_valid_interval():
 
 def test_random_walk_is_read_on_its_slope_and_breaks_the_t_interval():
     y = simulate(2, 2**20, N=0.005, K=1e-3)
-    result = classical_noise(y, RATE)
+    result = bc.classical_noise(y, RATE)
     n, k = result.slope_readings["N"], result.slope_readings["K"]
     assert n.kind == "reading" and n.ci_low < 0.005 < n.ci_high
     assert k.kind == "reading" and abs(k.local_slope - 0.5) < 0.125
@@ -43,13 +39,13 @@ def test_upper_bounds_hold_above_the_truth():
     """Where a term's slope is absent its value is bounded, and the bound sits above the
     truth: white noise dominates everywhere here, so Q, K and B are bounds."""
     y = simulate(3, 2**16, N=0.01, K=1e-5, Q=1e-6)
-    readings = classical_noise(y, RATE).slope_readings
+    readings = bc.classical_noise(y, RATE).slope_readings
     assert readings["Q"].kind == "upper_bound" and readings["Q"].ci_high > 1e-6
     assert readings["K"].kind == "upper_bound" and readings["K"].ci_high > 1e-5
 
 
 def test_student_t_interval_ignores_missing_samples():
     values = np.array([1.0, 2.0, np.nan, 3.0])
-    mean, _, high = student_t_interval(values, 0.95)
+    mean, _, high = bc.student_t_interval(values, 0.95)
     assert mean == 2.0
     assert high - mean == pytest.approx(4.302652729911275 * 1.0 / np.sqrt(3))

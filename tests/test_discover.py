@@ -11,24 +11,13 @@ from recording_files import write_csv
 from scipy import stats
 from scipy.signal import lfilter
 
-from bayescal._discover import (
-    AMBIGUOUS_LOG_BAYES_FACTOR,
-    LEVEL_BLOCKS,
-    TIME_BLOCKS,
-    DiscoveryData,
-    _gauss_markov_rate_autocovariance,
-    _level_design,
-    _LevelNoise,
-    discover,
-    effect_parameters,
-    gauss_markov_allan_variance,
-    gauss_markov_increment_autocovariance,
-    level_coefficients,
-    sample_final,
-)
-from bayescal._discover_command import discovery_result
-from bayescal._level import block_covariance_basis
-from bayescal._noise_model import component_weights
+import bayescal as bc
+from bayescal.capabilities._discovery import AMBIGUOUS_LOG_BAYES_FACTOR
+from bayescal.inference._checks import TIME_BLOCKS
+from bayescal.models._components import block_covariance_basis, component_weights
+from bayescal.models._composite import LEVEL_BLOCKS, LevelNoise, level_coefficients, level_design
+from bayescal.models.effects.gauss_markov import GaussMarkov
+from bayescal.report._discovery import discovery_document
 
 RATE = 20.0
 MINUTES = 12
@@ -52,33 +41,34 @@ def _record(seed, temperature=False):
     return t, values, profile, rng
 
 
-def _data(values, profile=None):
-    return DiscoveryData(
-        values=values, rate_hz=RATE, channel="gyro_x", unit="deg/s", temperature=profile
+def discover(values, profile=None, posterior=True):
+    return bc.discover(
+        values, RATE, temperature=profile, unit="deg/s", channel="gyro_x", posterior=posterior
     )
+
+
+def named(found):
+    return [effect.name for effect in found.effects]
 
 
 def test_clean_recording_with_irrelevant_temperature_has_no_effect():
     _, values, profile, _ = _record(1, temperature=True)
-    result = discover(_data(values, profile))
-    assert result.findings == ()
-    assert all(check["passed"] for check in result.final_checks)
+    found = discover(values, profile)
+    assert found.effects == ()
+    assert all(check.passed_after for check in found.checks)
 
 
 def test_concealed_sinusoid_is_named_and_its_parameters_covered():
     t, values, _, _ = _record(2)
     amplitude, frequency = 0.2 * WHITE_SD, 3.7
     values = values + amplitude * np.sin(2 * np.pi * frequency * t + 0.4)
-    data = _data(values)
-    result = discover(data)
-    assert [f.name for f in result.findings] == ["sinusoid"]
-    before = {c["name"]: c for c in result.baseline_checks}
-    after = {c["name"]: c for c in result.final_checks}
-    assert not before["spectral_line"]["passed"] and after["spectral_line"]["passed"]
-    assert before["spectral_line"]["location"]["frequency_hz"] == pytest.approx(frequency, abs=0.01)
-    posterior = sample_final(result.final, data, seed=0)
-    assert posterior.diagnostics.passed, posterior.diagnostics.failures
-    parameters = effect_parameters("sinusoid", result.findings[0], posterior, data)
+    found = discover(values)
+    assert named(found) == ["sinusoid"]
+    line = {check.name: check for check in found.checks}["spectral_line"]
+    assert not line.passed_before and line.passed_after
+    assert line.location["frequency_hz"] == pytest.approx(frequency, abs=0.01)
+    assert found.passed, found.posterior.diagnostics.failures
+    parameters = found.effects[0].parameters
     assert parameters["amplitude"]["q05"] <= amplitude <= parameters["amplitude"]["q95"]
     assert parameters["frequency"]["q05"] <= frequency <= parameters["frequency"]["q95"]
     assert parameters["amplitude"]["unit"] == "deg/s"
@@ -89,12 +79,10 @@ def test_warmup_longer_than_the_first_grid_is_located_with_an_interval():
     must still be located inside a 90 % interval of non-zero width, not pinned at the end."""
     t, values, _, _ = _record(5)
     amplitude, time_constant = 0.5 * WHITE_SD, 300.0
-    data = _data(values + amplitude * np.exp(-t / time_constant))
-    result = discover(data)
-    assert [f.name for f in result.findings] == ["warmup_transient"]
-    posterior = sample_final(result.final, data, seed=0)
-    assert posterior.diagnostics.passed, posterior.diagnostics.failures
-    parameters = effect_parameters("warmup_transient", result.findings[0], posterior, data)
+    found = discover(values + amplitude * np.exp(-t / time_constant))
+    assert named(found) == ["warmup_transient"]
+    assert found.passed, found.posterior.diagnostics.failures
+    parameters = found.effects[0].parameters
     located = parameters["time_constant"]
     assert located["q05"] <= time_constant <= located["q95"]
     assert located["q95"] > 1.1 * located["q05"] and located["q95"] > t[-1] / 3
@@ -105,35 +93,36 @@ def test_warmup_longer_than_the_first_grid_is_located_with_an_interval():
 def test_thermal_bias_is_told_from_a_random_walk_by_its_signature():
     t, values, profile, rng = _record(3, temperature=True)
     slope = 0.5 * WHITE_SD / np.ptp(profile)
-    thermal = _data(values + slope * (profile - profile.mean()), profile)
-    result = discover(thermal)
-    assert [f.name for f in result.findings] == ["thermal_bias"]
-    posterior = sample_final(result.final, thermal, seed=1)
-    c1 = effect_parameters("thermal_bias", result.findings[0], posterior, thermal)["c1"]
+    found = bc.discover(
+        values + slope * (profile - profile.mean()),
+        RATE,
+        temperature=profile,
+        unit="deg/s",
+        seed=1,
+    )
+    assert named(found) == ["thermal_bias"]
+    c1 = found.effects[0].parameters["c1"]
     assert c1["q05"] <= slope <= c1["q95"]
     assert c1["unit"] == "deg/s/degC"
 
     walk = 0.6 * WHITE_SD / math.sqrt(t[-1]) * np.cumsum(rng.standard_normal(t.size))
     walk /= math.sqrt(RATE)
-    result = discover(_data(values + walk, profile))
-    assert [f.name for f in result.findings] == ["rate_random_walk"]
+    assert named(discover(values + walk, profile, posterior=False)) == ["rate_random_walk"]
 
 
 def test_gauss_markov_shapes_agree_with_each_other():
     """The sampled autocovariance (averages over each period), summed into the Allan variance
     of m-sample averages, gives the continuous-time closed form of IEEE Std 952; the
     increments' autocovariance is its second difference."""
-    rate, time_constant = 10.0, 3.0
+    rate, term = 10.0, GaussMarkov(time_constant_s=3.0)
     lags = np.arange(400)
-    gamma = _gauss_markov_rate_autocovariance(lags, rate, time_constant)
+    gamma = term.rate_autocovariance(lags, rate)
     for m in (1, 5, 40, 150):
         weights = np.concatenate((-np.ones(m), np.ones(m))) / m
         correlation = np.correlate(weights, weights, mode="full")
         allan = 0.5 * float(np.sum(correlation * gamma[np.abs(np.arange(-2 * m + 1, 2 * m))]))
-        assert allan == pytest.approx(
-            gauss_markov_allan_variance(m / rate, 1.0, time_constant), rel=1e-9
-        )
-    increments = gauss_markov_increment_autocovariance(rate, time_constant)(lags[1:-1])
+        assert allan == pytest.approx(term.allan_variance(m / rate, 1.0), rel=1e-9)
+    increments = term.autocovariance(lags[1:-1], rate)
     second_difference = 2 * gamma[1:-1] - gamma[:-2] - gamma[2:]
     np.testing.assert_allclose(increments, second_difference, rtol=1e-12)
 
@@ -197,11 +186,11 @@ def test_block_means_likelihood_splits_into_one_block_ahead_predictions():
     data = values + walk + 0.01 * regressor[:, 0]
     white, walk_k = WHITE_SD / math.sqrt(RATE), 2e-4
     theta = np.array([math.log(white), 0.0, math.log(walk_k), 0.0, 0.0, 0.0, 0.0])
-    noise = _LevelNoise(np.array([1.0, 0, 1, 0, 0, 0, 0]), np.asarray(1.0), 0.0)
+    noise = LevelNoise(np.array([1.0, 0, 1, 0, 0, 0, 0]), np.asarray(1.0), 0.0)
     beta, _, predictive = level_coefficients(noise, data, regressor, RATE, theta)
     assert predictive.shape == (1, LEVEL_BLOCKS)
 
-    means, columns, start, stop = _level_design(data, regressor, RATE)
+    means, columns, start, stop = level_design(data, regressor, RATE)
     covariance = np.einsum(
         "t,tij->ij",
         np.asarray(component_weights(N=white, K=walk_k)),
@@ -226,11 +215,12 @@ def test_gauss_markov_is_told_from_a_random_walk_only_when_the_record_is_long_en
         phi = math.exp(-1 / (RATE * time_constant))
         sigma = 0.5 * WHITE_SD
         drive = rng.standard_normal(values.size) * sigma * math.sqrt(1 - phi * phi)
-        result = discover(_data(values + lfilter([1.0], [1.0, -phi], drive)))
-        first = result.findings[0]
-        margin = first.log_bayes_factor - first.runner_up[1]
+        found = discover(values + lfilter([1.0], [1.0, -phi], drive), posterior=False)
+        first = found.effects[0]
+        runner_up = first.evidence["runner_up"]
+        margin = first.evidence["log_bayes_factor"] - runner_up["log_bayes_factor"]
         if ratio < 30:
-            assert {first.name, first.runner_up[0]} == {"gauss_markov", "rate_random_walk"}
+            assert {first.name, runner_up["name"]} == {"gauss_markov", "rate_random_walk"}
             assert margin < AMBIGUOUS_LOG_BAYES_FACTOR
         else:
             assert first.name == "gauss_markov"
@@ -244,9 +234,9 @@ def test_a_mismatch_too_weak_to_name_is_reported_as_unexplained():
     size = profile.size // TIME_BLOCKS
     blocks = profile[: size * TIME_BLOCKS].reshape(TIME_BLOCKS, size).mean(axis=1)
     slope = 3.4 * WHITE_SD / math.sqrt(size) / np.linalg.norm(blocks - blocks.mean())
-    result = discover(_data(values + slope * (profile - profile.mean()), profile))
-    assert result.findings == ()
-    document = discovery_result(result, None, baseline_terms=("white",), source="sim", sim=None)
+    found = discover(values + slope * (profile - profile.mean()), profile)
+    assert found.effects == ()
+    document = discovery_document(found, source="sim")
     assert document["effects"] == []
     assert document["unexplained"]["checks"] == ["residual_vs_temperature"]
     assert document["unexplained"]["best_candidate"] == "thermal_bias"

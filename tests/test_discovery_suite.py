@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bayescal._discover import DECISIVE_LOG_BAYES_FACTOR, DiscoveryData, discover
+import bayescal as bc
+from bayescal.capabilities._discovery import DECISIVE_LOG_BAYES_FACTOR
 
 
 def _load_suite():
@@ -37,15 +38,12 @@ def test_expected_evidence_for_a_thermal_bias_matches_what_discovery_observes(hi
     and the term is named exactly when the expectation clears the decisive limit."""
     values, rate, temperature, truth = suite.simulate(hidden, np.random.default_rng(seed), seed)
     expected = suite.expected_log_bayes_factors(truth, rate, values.size, temperature)
-    data = DiscoveryData(
-        values=values, rate_hz=rate, channel="gyro_x", unit="deg/s", temperature=temperature
-    )
-    result = discover(data)
-    observed = {finding.name: finding.log_bayes_factor for finding in result.findings}
-    observed |= dict([result.undecided]) if result.undecided else {}
+    found = bc.discover(values, rate, temperature=temperature, unit="deg/s", posterior=False)
+    observed = {effect.name: effect.evidence["log_bayes_factor"] for effect in found.effects}
+    observed |= dict([found.result.undecided]) if found.result.undecided else {}
     gross = expected["thermal_bias"] + 0.5 * math.log(values.size / 2)
     assert abs(observed["thermal_bias"] - expected["thermal_bias"]) < 3 * math.sqrt(2 * gross)
-    named = "thermal_bias" in [finding.name for finding in result.findings]
+    named = "thermal_bias" in [effect.name for effect in found.effects]
     assert named == (expected["thermal_bias"] > DECISIVE_LOG_BAYES_FACTOR)
 
 

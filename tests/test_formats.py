@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 from recording_files import write_csv
 
+import bayescal as bc
+
 yaml = pytest.importorskip("yaml")  # PyYAML, which Kalibr reads its imu.yaml with
 pytest.importorskip("rosbags")
 
@@ -122,9 +124,7 @@ def test_bag_reads_exactly_as_the_csv(run_cli, tmp_path, recordings, kind):
 
 
 def test_bag_columns_units_and_times(recordings):
-    from bayescal._recording import load_table
-
-    table = load_table(recordings["bags"]["ros1"], topic="/imu")
+    table = bc.load_recording(recordings["bags"]["ros1"], topic="/imu")
     assert table.topic == "/imu" and table.start_stamp_ns == START_NS
     assert table.header_units["gyro_y"] == "rad/s" and table.header_units["acc_z"] == "m/s^2"
     np.testing.assert_array_equal(table.columns["gyro_y"], recordings["gyro"][:, 1])
@@ -139,9 +139,7 @@ def test_messages_of_varying_layout_read_through_rosbags(tmp_path):
     gyro, acc = _simulated_imu(seed=8)
     gyro, acc = gyro[:64], acc[:64]
     bag = write_bag(tmp_path / "odd", {"/imu": (gyro, acc)}, frame_ids=["a", "imu_link_12"])
-    from bayescal._rosbag import read_rosbag
-
-    table = read_rosbag(bag)
+    table = bc.load_recording(bag)
     np.testing.assert_array_equal(table.columns["gyro_x"], gyro[:, 0])
     np.testing.assert_array_equal(table.columns["acc_y"], acc[:, 1])
 
@@ -293,7 +291,12 @@ def test_matlab_script_sets_the_imusensor_properties(run_cli, tmp_path, recordin
 
 
 def test_posterior_means_are_exported_when_the_posterior_passed():
-    from bayescal._export import SensorNoise, estimates_from_result, kalibr_yaml, matlab_script
+    from bayescal.report._export import (
+        SensorNoise,
+        estimates_from_result,
+        kalibr_yaml,
+        matlab_script,
+    )
 
     readings = {
         "N": {"kind": "reading", "value": 2.0, "ci_low": 1.5, "ci_high": 2.5},

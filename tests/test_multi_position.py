@@ -15,19 +15,14 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 import bayescal as bc
-from bayescal._gravity import LocalGravity
-from bayescal._multi_position import (
+from bayescal.classical._multi_position import (
     FREE_PARAMETERS,
     SIX_FACE_PARAMETERS,
-    Poses,
-    bayesian_multi_position,
     calibration_matrices,
-    classical_multi_position,
-    find_poses,
-    simulate_poses,
 )
+from bayescal.models._multi_position import simulate_poses
 
-GRAVITY = LocalGravity(9.80123, 1e-5, "test")
+GRAVITY = bc.LocalGravity(9.80123, 1e-5, "test")
 # An Xsens-like raw-count sensor: scales (m/s^2 per count), misalignment angles, offsets.
 SCALES, ANGLES, OFFSETS = [1 / 415, 1 / 413, 1 / 418], [0.004, -0.007, 0.011], [33100, 33270, 32370]
 FREE_TRUTH = np.array([*SCALES, *ANGLES, *OFFSETS], dtype=float)
@@ -48,15 +43,20 @@ def random_directions(rng, count):
 
 def check_recovery(poses, truth, names, orientations):
     # At 0.999 a correct interval misses one parameter in a thousand.
-    classical = classical_multi_position(
-        poses, GRAVITY, orientations=orientations, confidence=0.999
+    calibration = bc.calibrate_multi_position(
+        poses,
+        gravity=GRAVITY,
+        unit="LSB",
+        orientations=orientations,
+        confidence=0.999,
+        seed=1,
     )
+    classical, fit = calibration.classical, calibration.bayesian
     assert classical.names == names
     for name, value, (estimate, half_width) in zip(
         names, truth, classical.parameters.values(), strict=True
     ):
         assert abs(estimate - value) <= half_width, name
-    fit = bayesian_multi_position(poses, classical, seed=1)
     assert fit.diagnostics.passed, fit.diagnostics.failures
     standard_errors = np.sqrt(np.diag(classical.covariance))
     for name, value, standard_error in zip(names, truth, standard_errors, strict=True):
@@ -105,7 +105,7 @@ def test_classical_fit_matches_an_independent_least_squares_solver():
     poses = simulate_poses(
         rng, FREE_TRUTH, random_directions(rng, N_FREE), GRAVITY.value, noise_sd=3.3
     )
-    ours = classical_multi_position(poses, GRAVITY)
+    ours = bc.calibrate_multi_position(poses, gravity=GRAVITY, unit="LSB", bayesian=False).classical
 
     def residuals(p):  # imu_tk's residual, written out again
         k, (a_yz, a_zy, a_zx), b = p[:3] * 1e-3, p[3:6], p[6:]
@@ -129,12 +129,14 @@ def test_poses_that_do_not_span_the_sphere_are_refused():
     cap = directions[directions[:, 2] > np.cos(np.radians(30))][:N_FREE]
     poses = simulate_poses(rng, FREE_TRUTH, cap, GRAVITY.value, noise_sd=3.3)
     with pytest.raises(bc.InputError, match="do not determine the calibration"):
-        classical_multi_position(poses, GRAVITY)
+        bc.calibrate_multi_position(poses, gravity=GRAVITY, unit="LSB", bayesian=False)
     five_faces = simulate_poses(
         rng, SIX_FACE_TRUTH, np.vstack([FACES[:5]] * 2), GRAVITY.value, six_face=True, noise_sd=3.3
     )
     with pytest.raises(bc.InputError, match="not -z"):
-        classical_multi_position(five_faces, GRAVITY, orientations="six-face")
+        bc.calibrate_multi_position(
+            five_faces, gravity=GRAVITY, unit="LSB", orientations="six-face", bayesian=False
+        )
 
 
 # --- real sessions --------------------------------------------------------------------------
@@ -162,11 +164,10 @@ def test_xsens_session_agrees_with_the_datasheet(shared_data):
     repeatability, far wider than our intervals (0.01-0.04 % on the scales)."""
     data = np.loadtxt(shared_data / "imu_tk_xsens" / "xsens_acc.mat")
     assert np.median(np.diff(data[:, 0])) == pytest.approx(0.01, abs=1e-4)
-    poses = find_poses(data[:, 1:], 100.0)
-    assert poses.n == 41
-    gravity = LocalGravity(9.81744, 0.0, "imu_tk's test application")
-    classical = classical_multi_position(poses, gravity)
-    fit = bayesian_multi_position(poses, classical, seed=0)
+    gravity = bc.LocalGravity(9.81744, 0.0, "imu_tk's test application")
+    calibration = bc.calibrate_multi_position(data[:, 1:], 100.0, gravity=gravity, unit="LSB")
+    assert calibration.poses.n == 41
+    classical, fit = calibration.classical, calibration.bayesian
     assert fit.diagnostics.passed, fit.diagnostics.failures
     datasheet_sensitivity = np.array([415, 413, 415])  # counts per m/s^2, integers
     datasheet_misalignment = np.array([[1, 0, -0.01], [0.01, 1, 0.01], [0.02, 0.01, 1]])
@@ -201,10 +202,14 @@ def test_imucal_ferraris_session_agrees_with_imucal(shared_data):
     session in raw counts, a = R_a^-1 K_a^-1 (r - b_a)."""
     parts = annotated_parts(shared_data)
     order = ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a")
-    poses = Poses.from_samples([parts[name] for name in order])
-    classical = classical_multi_position(
-        poses, LocalGravity(9.81, 0.0, "imucal's default"), orientations="six-face"
-    )
+    poses = bc.Poses.from_samples([parts[name] for name in order])
+    classical = bc.calibrate_multi_position(
+        poses,
+        gravity=bc.LocalGravity(9.81, 0.0, "imucal's default"),
+        orientations="six-face",
+        unit="LSB",
+        bayesian=False,
+    ).classical
     reference = json.loads((shared_data / "imucal_ferraris" / "example_cal.json").read_text())
     k_a, r_a, b_a = (np.array(reference[key]) for key in ("K_a", "R_a", "b_a"))
     matrices = calibration_matrices(classical.values, six_face=True)
@@ -422,8 +427,8 @@ def test_bad_input(run_cli, tmp_path):
 
 
 def test_a_failed_health_check_exits_1(run_cli, tmp_path, monkeypatch):
-    import bayescal._multi_position as model
-    from bayescal._mcmc import Diagnostics
+    import bayescal.capabilities._multi_position as model
+    from bayescal.inference._mcmc import Diagnostics
 
     def unhealthy(poses, classical, **_):
         names = (*classical.names, "pose_scatter", "g_local")

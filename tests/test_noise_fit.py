@@ -2,30 +2,20 @@
 sensor grades, a small seeded coverage study (the full one is benchmarks/noise_coverage.py),
 reproducibility and the health checks."""
 
-import jax
 import numpy as np
 import pytest
 
 import bayescal as bc
-from bayescal._classical import slope_readings
-from bayescal._noise_fit import fit_noise, parse_terms
-from bayescal._noise_model import NoiseModel
+from bayescal.classical._noise import slope_readings
+from bayescal.models._terms import parse_terms
 
 
 def simulate(seed, n, rate, **parameters):
-    model = NoiseModel(rate_hz=rate, **parameters)
-    return np.asarray(model.simulate(jax.random.PRNGKey(seed), n))
+    return bc.NoiseModel(rate_hz=rate, **parameters).simulate(n, seed=seed)
 
 
 def fit(values, rate, terms="white,bias_instability,rate_random_walk", seed=0, **options):
-    return fit_noise(
-        values,
-        rate,
-        bc.allan_deviation(values, rate),
-        terms=parse_terms(terms),
-        seed=seed,
-        **options,
-    )
+    return bc.fit_noise(values, rate, terms=terms, seed=seed, **options)
 
 
 def within(summary, truth, sigmas=4.0):

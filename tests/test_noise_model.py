@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 import bayescal as bc
-from bayescal._noise_model import NoiseModel
 
 RATE = 100.0
 N_SAMPLES = 2**14
@@ -25,9 +24,9 @@ TERMS = {
 
 @pytest.mark.parametrize("term", list(TERMS))
 def test_simulated_allan_variance_matches_model(term):
-    model = NoiseModel(rate_hz=RATE, bias=0.3, **TERMS[term])
+    model = bc.NoiseModel(rate_hz=RATE, bias=0.3, **TERMS[term])
     keys = jax.random.split(jax.random.PRNGKey(42), REPLICAS)
-    samples = np.asarray(jax.jit(jax.vmap(lambda key: model.simulate(key, N_SAMPLES)))(keys))
+    samples = np.asarray(jax.jit(jax.vmap(lambda key: model.sample(key, N_SAMPLES)))(keys))
     result = bc.allan_deviation(samples, RATE, "octave", noise_type=0)
     keep = result.m <= N_SAMPLES // 8
     variance = result.deviation[:, keep] ** 2
@@ -42,16 +41,16 @@ def test_simulated_allan_variance_matches_model(term):
 
 
 def test_same_key_same_samples_and_bias_is_the_start():
-    model = NoiseModel(rate_hz=RATE, bias=0.3, N=0.01, K=1e-3, B=1e-3)
-    first = model.simulate(jax.random.PRNGKey(1), 1000)
-    np.testing.assert_array_equal(first, model.simulate(jax.random.PRNGKey(1), 1000))
-    assert not np.array_equal(first, model.simulate(jax.random.PRNGKey(2), 1000))
+    model = bc.NoiseModel(rate_hz=RATE, bias=0.3, N=0.01, K=1e-3, B=1e-3)
+    first = model.sample(jax.random.PRNGKey(1), 1000)
+    np.testing.assert_array_equal(first, model.sample(jax.random.PRNGKey(1), 1000))
+    assert not np.array_equal(first, model.sample(jax.random.PRNGKey(2), 1000))
     keys = jax.random.split(jax.random.PRNGKey(3), 4000)
-    starts = jax.vmap(lambda key: model.simulate(key, 64)[0])(keys)
+    starts = jax.vmap(lambda key: model.sample(key, 64)[0])(keys)
     # The first sample is the turn-on bias plus the first period's noise.
     assert abs(float(np.mean(starts)) - 0.3) < 4 * float(np.std(starts)) / np.sqrt(4000)
 
 
 def test_rejects_a_non_positive_rate():
     with pytest.raises(ValueError, match="rate_hz"):
-        NoiseModel(rate_hz=0.0)
+        bc.NoiseModel(rate_hz=0.0)

@@ -13,6 +13,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
+import bayescal as bc
+
 RATE_HZ = 10.0
 N_SAMPLES = 2**13
 IMAGE = re.compile(r'<img[^>]*src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
@@ -23,15 +25,13 @@ def _recording(path):
     accelerometer at 1 g, both simulated by bayescal's own model."""
     import jax
 
-    from bayescal._noise_model import NoiseModel
-
-    gyro = NoiseModel(rate_hz=RATE_HZ, bias=0.2, N=0.02, K=1e-3)
-    accel = NoiseModel(rate_hz=RATE_HZ, bias=9.81, N=0.004, K=2e-4)
+    gyro = bc.NoiseModel(rate_hz=RATE_HZ, bias=0.2, N=0.02, K=1e-3)
+    accel = bc.NoiseModel(rate_hz=RATE_HZ, bias=9.81, N=0.004, K=2e-4)
     keys = jax.random.split(jax.random.PRNGKey(5), 2)
     columns = {
         "time": np.arange(N_SAMPLES) / RATE_HZ,
-        "gyro_x[deg/s]": np.asarray(gyro.simulate(keys[0], N_SAMPLES)),
-        "acc_z[m/s^2]": np.asarray(accel.simulate(keys[1], N_SAMPLES)),
+        "gyro_x[deg/s]": np.asarray(gyro.sample(keys[0], N_SAMPLES)),
+        "acc_z[m/s^2]": np.asarray(accel.sample(keys[1], N_SAMPLES)),
     }
     lines = [",".join(columns)]
     lines += [",".join(repr(float(v)) for v in row) for row in zip(*columns.values(), strict=True)]
@@ -122,13 +122,12 @@ def _assert_not_blank(image: np.ndarray) -> None:
 @pytest.fixture(scope="module")
 def report(tmp_path_factory):
     """A report of the two channels, with a sensor card and a hand-made discovery."""
-    from bayescal._recording import load_table
-    from bayescal._report_command import report_recording
+    from bayescal.report._report import report_recording
 
     folder = tmp_path_factory.mktemp("report")
     csv = _recording(folder / "bench.csv")
     outcome = report_recording(
-        load_table(csv),
+        bc.load_recording(csv),
         ["gyro_x", "acc_z"],
         folder / "out",
         stem="bench",
@@ -213,7 +212,7 @@ def test_posterior_bands_agree_with_the_data(report):
 
 
 def test_discovery_section_alone():
-    from bayescal._report import discovery_section
+    from bayescal.report._html import discovery_section
 
     section = discovery_section(_findings(), unit="deg/s")
     assert "thermal_bias" in section and "passes" in section and "deg/s/°C" in section

@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 from recording_files import write_csv
 
-from bayescal._discover import DECISIVE_LOG_BAYES_FACTOR, DiscoveryData, discover, discrete_step
-from bayescal._recording import load_table, prepare_channel
-from bayescal._saturation import impute_clipped, rail_check, saturation_scan
+import bayescal as bc
+from bayescal.capabilities._discovery import DECISIVE_LOG_BAYES_FACTOR
+from bayescal.models.effects.saturation import impute_clipped, saturation_scan
+from bayescal.recording._levels import discrete_step, rail_check
 
 N = 20_000
 
@@ -99,12 +100,13 @@ def test_discovery_names_a_rail_concealed_in_the_noise_tail():
     in a plot, named, nothing else added, the spread recovered."""
     rng = np.random.default_rng(11)
     values = np.minimum(0.1 + 0.05 * rng.standard_normal(14_400), 0.1 + 3 * 0.05)
-    result = discover(DiscoveryData(values=values, rate_hz=20.0, channel="gyro_x", unit="deg/s"))
-    assert [finding.name for finding in result.findings] == ["saturation"]
-    rail = {check["name"]: check for check in result.baseline_checks}["rail"]
-    assert not rail["passed"] and rail["location"]["rail"] == pytest.approx(0.25)
-    assert result.final.spec.terms() == ["bias", "white", "saturation"]
-    assert abs(result.saturation["sd"] - 0.05) < 4 * 0.05 / math.sqrt(2 * values.size)
+    found = bc.discover(values, 20.0, unit="deg/s", posterior=False)
+    assert [effect.name for effect in found.effects] == ["saturation"]
+    rail = {check.name: check for check in found.checks}["rail"]
+    assert not rail.passed_before and rail.location["rail"] == pytest.approx(0.25)
+    assert found.final_terms == ("bias", "white", "saturation")
+    unclipped_sd = found.effects[0].evidence["unclipped_sd"]
+    assert abs(unclipped_sd - 0.05) < 4 * 0.05 / math.sqrt(2 * values.size)
 
 
 def test_cli_reports_the_rail_and_the_unclipped_mean(run_cli, tmp_path):
@@ -134,5 +136,5 @@ def test_cli_reports_the_rail_and_the_unclipped_mean(run_cli, tmp_path):
     assert "upper rail 247 deg/s" in stdout and "unclipped mean" in stdout
     assert (folder / "discover_gyro_z_distribution.png").stat().st_size > 1000
     # Every command that reads the channel is told (a mean of it would be biased).
-    notes = prepare_channel(load_table(path), "gyro_z").notes
+    notes = bc.load_recording(path).channel("gyro_z").notes
     assert any("clipped" in note and "247 deg/s" in note for note in notes)

@@ -9,9 +9,10 @@ import pytest
 from recording_files import write_csv
 
 import bayescal as bc
-from bayescal._noise_fit import NoisePrior
-from bayescal._noise_model import NoiseModel
-from bayescal._thermal import ThermalRecord, _identified_from, sample_thermal, thermal_problem
+from bayescal.capabilities._thermal import sample_thermal
+from bayescal.inference._priors import default_prior
+from bayescal.models._noise_problem import NoisePrior
+from bayescal.models._thermal import ThermalRecord, _identified_from, thermal_problem
 
 RATE = 10.0
 TRUTH = (0.5, 0.01)  # bias(T) = c0 + c1 (T - 35)
@@ -22,33 +23,21 @@ def warm_up(seed, n=2**14, walk=3e-4):
     random walk."""
     t = np.arange(n) / RATE
     temperature = 45 - 20 * np.exp(-t / 400)
-    noise = NoiseModel(rate_hz=RATE, N=0.005, K=walk).simulate(jax.random.PRNGKey(seed), n)
-    return TRUTH[0] + TRUTH[1] * (temperature - 35) + np.asarray(noise), temperature
+    noise = bc.NoiseModel(rate_hz=RATE, N=0.005, K=walk).simulate(n, seed=seed)
+    return TRUTH[0] + TRUTH[1] * (temperature - 35) + noise, temperature
 
 
 def test_thermal_slope_recovered_beside_a_random_walk():
     values, temperature = warm_up(0)
-    record = ThermalRecord(values, temperature, RATE, ((0, values.size),))
-    problem = thermal_problem(
-        record,
-        1,
-        35.0,
-        noise_terms=("white", "rate_random_walk"),
-        allan=bc.allan_deviation(values, RATE),
-    )
-    fit = sample_thermal(problem, 1, 35.0, seed=0)
-    assert fit.diagnostics.passed, fit.diagnostics.failures
-    low, high = np.quantile(fit.coefficient_draws[:, 1], [0.05, 0.95])
+    options = {"degree": 1, "reference": 35.0, "seed": 0}
+    fit = bc.fit_thermal(values, temperature, RATE, terms="white,rrw", **options)
+    assert fit.passed, fit.failures
+    low, high = np.quantile(fit.posterior.coefficient_draws[:, 1], [0.05, 0.95])
     assert low <= TRUTH[1] <= high
     # A model blind to the random walk (white noise only) is far more confident than the data
     # allow: its interval is several times narrower.
-    white = thermal_problem(
-        record, 1, 35.0, noise_terms=("white",), allan=bc.allan_deviation(values, RATE)
-    )
-    naive = sample_thermal(white, 1, 35.0, seed=0)
-    assert np.sqrt(fit.coefficient_covariance[1, 1]) > 3 * np.sqrt(
-        naive.coefficient_covariance[1, 1]
-    )
+    naive = bc.fit_thermal(values, temperature, RATE, terms="white", **options)
+    assert np.sqrt(fit.covariance[1, 1]) > 3 * np.sqrt(naive.covariance[1, 1])
 
 
 def test_update_with_white_noise_matches_the_closed_form():
@@ -78,11 +67,9 @@ def test_update_with_white_noise_matches_the_closed_form():
         record,
         1,
         35.0,
-        noise_terms=(),
-        allan=None,
+        noise_prior=tight,
         coefficient_prior=(prior_mean, prior_cov),
         offset_prior=measured,
-        noise_prior=tight,
     )
     fit = sample_thermal(problem, 1, 35.0, seed=1)
 
@@ -244,8 +231,7 @@ def test_learned_drift_given_its_scale_is_the_fixed_drift():
     record = ThermalRecord(values, temperature, RATE, ((0, 1000), (1000, 2000)))
     prior = (np.array([0.49, 0.011]), np.array([[1e-6, 1e-8], [1e-8, 1e-8]]))
     common = {
-        "noise_terms": ("white",),
-        "allan": bc.allan_deviation(values, RATE),
+        "noise_prior": default_prior(("white",), bc.allan_deviation(values, RATE)),
         "coefficient_prior": prior,
         "offset_prior": [(0.0, 0.001), None],
         "calibrated_range": (25.0, 45.0),
@@ -278,7 +264,7 @@ def test_a_quantized_temperature_identifies_high_degrees_late():
     temperature = np.round(np.linspace(25.0, 26.0, 9600), 1)
     values = 0.01 * np.random.default_rng(0).standard_normal(temperature.size)
     record = ThermalRecord(values, temperature, RATE, ((0, values.size),))
-    common = {"noise_terms": ("white",), "allan": bc.allan_deviation(values, RATE)}
+    common = {"noise_prior": default_prior(("white",), bc.allan_deviation(values, RATE))}
     starts = [
         _identified_from(thermal_problem(record, degree, 25.5, **common).design)
         for degree in range(5)
@@ -331,16 +317,14 @@ def test_update_of_an_aged_sensor_covers_the_truth(run_cli, tmp_path):
         calibration = lab_calibration(rng)
         cal = tmp_path / f"cal{seed}.json"
         cal.write_text(json.dumps(calibration))
-        model = NoiseModel(rate_hz=RATE, N=0.005)
+        model = bc.NoiseModel(rate_hz=RATE, N=0.005)
         keys = jax.random.split(jax.random.PRNGKey(100 + seed), 6)
         values, temperature, periods, measured = [], [], [], []
         for p, centre in enumerate(np.linspace(30, 36, 6)):
             t_period = centre + 0.3 * np.sin(np.arange(1200) / 150 + rng.uniform(0, 6))
             offset = rng.normal(0, 0.003)
             powers = (t_period[:, None] - 35) ** np.arange(3)
-            values.append(
-                powers @ AGING["now"] + offset + np.asarray(model.simulate(keys[p], 1200))
-            )
+            values.append(powers @ AGING["now"] + offset + np.asarray(model.sample(keys[p], 1200)))
             temperature.append(t_period)
             periods.append(f"{120 * p}:{120 * (p + 1)}")
             measured.append(f"{offset + rng.normal(0, 0.001):.6f}±0.001")

@@ -12,9 +12,7 @@ from recording_files import write_csv
 from scipy import stats
 
 import bayescal as bc
-from bayescal._gravity import local_gravity, normal_gravity
-from bayescal._noise_model import NoiseModel
-from bayescal._two_position import Section, bayesian_two_position, classical_two_position
+from bayescal.classical._gravity import normal_gravity
 
 RATE = 100.0
 G = 9.80123
@@ -31,30 +29,31 @@ def test_normal_gravity_reproduces_wgs84_published_values():
     assert gradient / 100 == pytest.approx(-3.086e-6, rel=1e-3)
 
 
-def test_local_gravity_from_the_command_line():
-    given = local_gravity(given="9.80123±0.00002")
+def test_local_gravity_computed_or_measured():
+    given = bc.LocalGravity.measured(9.80123, 2e-5)
     assert (given.value, given.uncertainty) == (9.80123, 2e-5)
-    assert local_gravity(given="9.80123+-0.00002").uncertainty == 2e-5
-    computed = local_gravity(40.1, 220.0)
+    computed = bc.local_gravity(40.1, 220.0)
     assert computed.value == pytest.approx(normal_gravity(40.1, 220.0)) and computed.uncertainty > 0
     with pytest.raises(bc.InputError, match="not a gravity"):
-        local_gravity(given="98.1")
+        bc.LocalGravity.measured(98.1)
+    with pytest.raises(bc.InputError, match="uncertainty"):
+        bc.LocalGravity.measured(9.81, -1.0)
     with pytest.raises(bc.InputError, match="--latitude"):
-        local_gravity()
+        bc.local_gravity(100.0)
 
 
 def simulate_sections(seed, n=6000, **noise):
-    model = NoiseModel(rate_hz=RATE, **noise)
+    model = bc.NoiseModel(rate_hz=RATE, **noise)
     keys = jax.random.split(jax.random.PRNGKey(seed), 2)
-    up = OFFSET + G / SCALE + np.asarray(model.simulate(keys[0], n))
-    down = OFFSET - G / SCALE + np.asarray(model.simulate(keys[1], n))
+    up = OFFSET + G / SCALE + np.asarray(model.sample(keys[0], n))
+    down = OFFSET - G / SCALE + np.asarray(model.sample(keys[1], n))
     return up, down
 
 
 def test_classical_numbers_match_an_independent_computation():
     up, down = simulate_sections(1, N=0.0004)
-    gravity = local_gravity(given="9.80123±0.0001")
-    result = classical_two_position(up, down, gravity, 0.95)
+    gravity = bc.LocalGravity.measured(9.80123, 0.0001)
+    result = bc.calibrate_two_position(up, down, RATE, gravity=gravity, bayesian=False).classical
 
     def half_width(x):
         low, high = stats.t.interval(0.95, x.size - 1, loc=x.mean(), scale=stats.sem(x))
@@ -78,21 +77,21 @@ def test_classical_numbers_match_an_independent_computation():
 
 def test_bayesian_recovers_scale_and_offset_with_a_random_walk():
     up, down = simulate_sections(2, N=0.0004, K=2e-4)
-    gravity = local_gravity(given=f"{G}±0.00001")
-    result = bayesian_two_position(
-        Section(up, 0.0, "up"),
-        Section(down, 70.0, "down"),
+    gravity = bc.LocalGravity.measured(G, 0.00001)
+    calibration = bc.calibrate_two_position(
+        bc.Section(up, 0.0, "up"),
+        bc.Section(down, 70.0, "down"),
         RATE,
-        gravity,
-        terms=("white", "rate_random_walk"),
+        gravity=gravity,
+        terms="white,rate_random_walk",
         gap_s=70.0,
         seed=0,
     )
-    assert result.noise.diagnostics.passed, result.noise.diagnostics.failures
+    result, classical = calibration.bayesian, calibration.classical
+    assert calibration.passed, result.noise.diagnostics.failures
     for name, truth in (("scale", SCALE), ("offset", OFFSET)):
         draws = np.ravel(result.draws[name])
         assert abs(draws.mean() - truth) <= 4 * draws.std(), name
-    classical = classical_two_position(up, down, gravity, 0.95)
     # The classical offset interval, blind to the random walk, is much narrower.
     assert np.std(result.draws["offset"]) > 3 * classical["offset"][1] / 1.96
 

@@ -1,0 +1,229 @@
+"""The noise of one static channel: the classical numbers (:mod:`bayescal.classical._noise`)
+and, beside them, the posterior of the noise model (:mod:`bayescal.inference._noise_posterior`)."""
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from .._errors import HealthCheckError, InputError
+from ..classical._noise import ClassicalNoise, classical_noise
+from ..inference._noise_posterior import NoisePosterior, sample_noise
+from ..inference._priors import card_prior, default_prior
+from ..models._level import level_summary
+from ..models._noise_model import parameter_unit
+from ..models._noise_problem import NoiseProblem
+from ..models._terms import DEFAULT_TERMS, parse_terms
+from ..models._whittle import spectral_summary
+from ..recording._sensor_cards import SensorCard, find_card
+
+
+@dataclass(frozen=True)
+class NoiseFit:
+    """The noise of one static channel: the classical block beside the posterior of the
+    noise model (:func:`fit_noise`).
+
+    ``posterior`` is the ArviZ DataTree of the draws (its ``posterior`` group has one variable
+    per parameter: ``bias``, ``N``, ``B``, ``K``, ``Q``, ``R``, ``F`` as fitted, each with its
+    unit); :attr:`summary` gives mean, sd, 5 % and 95 % quantiles, the MAP and its Laplace sd
+    with units; :meth:`check` raises when the posterior failed its checks.
+    """
+
+    channel: str
+    unit: str
+    rate_hz: float
+    classical: ClassicalNoise
+    """Student-t bias, sd, Allan deviation with intervals, IEEE 952 readings."""
+    fit: NoisePosterior = field(repr=False)
+    """The posterior itself (draws, diagnostics, the likelihood's data)."""
+    source: str = "<array>"
+    notes: tuple[str, ...] = ()
+
+    @property
+    def terms(self) -> tuple[str, ...]:
+        return self.fit.terms
+
+    @property
+    def parameters(self) -> dict:
+        """parameter -> its posterior summary (mean, sd, q05, q95, map, map_sd), in the
+        parameter's unit (:attr:`summary` gives the unit beside each)."""
+        return self.fit.parameters
+
+    @property
+    def draws(self) -> dict:
+        """parameter -> (walkers, draws) posterior draws."""
+        return self.fit.draws
+
+    @property
+    def diagnostics(self):
+        """The sampler's checks (R-hat, ESS, autocorrelation time, acceptance, MAP)."""
+        return self.fit.diagnostics
+
+    @property
+    def passed(self) -> bool:
+        """Whether the posterior passed its checks (R-hat, ESS, autocorrelation, acceptance,
+        a converged MAP)."""
+        return bool(self.fit.diagnostics.passed)
+
+    @property
+    def failures(self) -> tuple[str, ...]:
+        return self.fit.diagnostics.failures
+
+    @property
+    def summary(self) -> dict:
+        """parameter -> {mean, sd, q05, q95, map, map_sd, unit}: the posterior's 90 %
+        interval and the MAP with its Laplace sd, in the parameter's unit."""
+        return {
+            name: {
+                "mean": s.mean,
+                "sd": s.sd,
+                "q05": s.q05,
+                "q95": s.q95,
+                "map": s.map,
+                "map_sd": s.map_sd,
+                "unit": parameter_unit(name, self.unit),
+            }
+            for name, s in self.fit.parameters.items()
+        }
+
+    @cached_property
+    def posterior(self):
+        """The posterior as an ArviZ DataTree (groups posterior, sample_stats,
+        log_likelihood, observed_data)."""
+        from ..inference._datatree import noise_datatree
+
+        return noise_datatree(self.fit, self.unit, channel=self.channel, source=self.source)
+
+    def check(self) -> "NoiseFit":
+        """Raise :class:`~bayescal.HealthCheckError` naming the failed checks, if any."""
+        if not self.passed:
+            raise HealthCheckError(
+                f"{self.channel}: posterior checks failed: " + "; ".join(self.failures)
+            )
+        return self
+
+
+def _as_channel(y, rate_hz, unit, channel):
+    """(values, rate, unit, channel name, source, notes) from an array or a Channel."""
+    if hasattr(y, "values") and hasattr(y, "rate_hz"):
+        if rate_hz is not None and abs(rate_hz / y.rate_hz - 1) > 1e-9:
+            raise InputError(
+                f"rate_hz={rate_hz} but the channel {y.channel} is sampled at {y.rate_hz:g} Hz",
+                fix="leave rate_hz out for a Channel",
+            )
+        if unit is not None and unit != y.unit:
+            raise InputError(
+                f"unit={unit!r} but the channel {y.channel} is in {y.unit}",
+                fix="leave unit out for a Channel, or prepare it with that unit",
+            )
+        return y.values, y.rate_hz, y.unit, y.channel, y.source, y.notes
+    if rate_hz is None or not rate_hz > 0:
+        raise InputError(f"rate_hz={rate_hz!r} must be a positive sample rate in Hz")
+    values = np.asarray(y, dtype=float)
+    if values.ndim != 1:
+        raise InputError(f"y: one channel, a 1-D array (shape {values.shape})")
+    return values, float(rate_hz), unit or "unit", channel, "<array>", ()
+
+
+def noise_prior(terms, classical: ClassicalNoise, unit: str, sensor: SensorCard | str | None):
+    """The prior of the noise parameters: the weakly informative default, or a sensor card's
+    datasheet figures where it gives them."""
+    if sensor is None:
+        return default_prior(terms, classical.allan)
+    card = find_card(sensor) if isinstance(sensor, str) else sensor
+    return card_prior(card, terms, unit, classical.allan)
+
+
+def fit_noise(
+    y,
+    rate_hz: float | None = None,
+    *,
+    terms=DEFAULT_TERMS,
+    sensor: str | SensorCard | None = None,
+    seed: int = 0,
+    unit: str | None = None,
+    channel: str = "channel",
+    confidence: float = 0.95,
+    taus="octave",
+    n_walkers: int = 32,
+    max_steps: int = 40_000,
+    sensor_fallback: bool = False,
+    progress: bool = False,
+) -> NoiseFit:
+    """The noise of a static channel: classical numbers and the posterior of the noise model.
+
+    Parameters
+    ----------
+    y : array_like or Channel
+        The samples (NaN marks a missing one); a :class:`~bayescal.Channel` brings its rate,
+        unit and name.
+    rate_hz : float
+        Sample rate, Hz (from the channel when ``y`` is one).
+    terms : str or tuple of str
+        Noise terms beside the bias: white, bias_instability, rate_random_walk, quantization,
+        rate_ramp, output_filter (aliases such as ``rrw`` and ``all`` as on the command line).
+    sensor : str or SensorCard, optional
+        A sensor card (``bayescal sensors``) whose datasheet figures become priors.
+    seed : int
+        The same inputs and seed give the same posterior.
+    unit : str, optional
+        The channel's unit (deg/s, m/s^2 ...); parameters are reported in units derived from
+        it (IEEE Std 952: N in unit/√Hz, B in unit, K in unit·√Hz ...).
+    confidence : float
+        Confidence of the classical intervals.
+    taus : str, int or array
+        Averaging times of the classical Allan deviation (:func:`~bayescal.allan_deviation`).
+    n_walkers, max_steps : int
+        emcee walkers, and the most steps before the convergence check fails.
+    sensor_fallback : bool
+        When the card says nothing of this kind of channel (or of the fitted terms), use the
+        weakly informative prior and say so in ``notes`` instead of raising.
+
+    Returns
+    -------
+    NoiseFit
+        Classical block, posterior (ArviZ DataTree), summary with units, health status.
+
+    Raises
+    ------
+    InputError
+        An unknown term, a card that gives none of the fitted terms, too few samples.
+
+    Examples
+    --------
+    >>> import bayescal as bc
+    >>> model = bc.NoiseModel(rate_hz=100.0, bias=0.4, N=0.0035, K=4e-5)
+    >>> fit = bc.fit_noise(model.simulate(2**16, seed=3), 100.0, unit="deg/s")
+    >>> fit.passed, sorted(fit.summary)
+    (True, ['B', 'K', 'N', 'bias'])
+    >>> fit.summary["N"]["unit"]
+    'deg/s/sqrt(Hz)'
+    """
+    values, rate_hz, unit, channel, source, notes = _as_channel(y, rate_hz, unit, channel)
+    terms = parse_terms(terms) if isinstance(terms, str) else tuple(terms)
+    try:
+        classical = classical_noise(values, rate_hz, confidence=confidence, taus=taus)
+    except InputError as error:
+        if source == "<array>":
+            raise
+        raise InputError(error.problem, source=source, column=channel, fix=error.fix) from None
+    try:
+        prior = noise_prior(terms, classical, unit, sensor)
+    except InputError as error:
+        if not sensor_fallback:
+            raise
+        prior = default_prior(terms, classical.allan)
+        notes = (*notes, f"sensor card not used as prior: {error.problem}")
+    problem = NoiseProblem(spectral_summary(values, rate_hz), level_summary(values, rate_hz), prior)
+    fit = sample_noise(
+        problem, terms=terms, seed=seed, n_walkers=n_walkers, max_steps=max_steps, progress=progress
+    )
+    return NoiseFit(
+        channel=channel,
+        unit=unit,
+        rate_hz=rate_hz,
+        classical=classical,
+        fit=fit,
+        source=source,
+        notes=tuple(notes),
+    )

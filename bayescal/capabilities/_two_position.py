@@ -1,0 +1,226 @@
+"""Two-position accelerometer calibration: the classical course method beside the Bayesian
+model's posterior (:mod:`bayescal.models._two_position`), which carries correlated noise into
+scale and offset — the part the classical RMS uncertainty, built on independent samples,
+leaves out."""
+
+import math
+from dataclasses import dataclass
+
+import jax.numpy as jnp
+import numpy as np
+
+from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from .._errors import HealthCheckError
+from ..classical._allan import allan_deviation
+from ..classical._gravity import LocalGravity
+from ..classical._two_position import Section, check_sections, classical_two_position
+from ..inference._noise_posterior import NoisePosterior, sample_noise
+from ..inference._priors import default_prior
+from ..models._components import SPECTRAL_COMPONENTS, component_weights
+from ..models._level import bias_given_noise, level_summary
+from ..models._noise_problem import NoiseProblem
+from ..models._terms import DEFAULT_TERMS, parse_terms
+from ..models._two_position import offset_drift_weights
+from ..models._whittle import spectral_summary
+
+
+@dataclass(frozen=True)
+class BayesianTwoPosition:
+    draws: dict
+    """scale, offset, g_local, level_up, level_down: posterior draws."""
+    map_values: dict
+    map_sd: dict
+    noise: NoisePosterior
+
+
+def bayesian_two_position(
+    up: Section,
+    down: Section,
+    rate_hz: float,
+    gravity: LocalGravity,
+    *,
+    terms: tuple[str, ...],
+    gap_s: float | None,
+    seed: int,
+    progress: bool = False,
+) -> BayesianTwoPosition:
+    """Joint posterior of scale, offset and g_local; ``gap_s`` is the time between the
+    starts of the sections when it is known (one file)."""
+    joined = np.concatenate([up.values, [np.nan], down.values])
+    prior = default_prior(terms, allan_deviation(joined, rate_hz))
+    problem = NoiseProblem(
+        spectral_summary(joined, rate_hz), level_summary(up.values, rate_hz), prior
+    )
+    noise = sample_noise(problem, terms=terms, seed=seed, progress=progress)
+    rng = np.random.default_rng(seed + 1)
+
+    levels = {
+        name: level_summary(section.values, rate_hz)
+        for name, section in (("up", up), ("down", down))
+    }
+    drift = offset_drift_weights(gap_s, rate_hz) if gap_s else np.zeros(len(SPECTRAL_COMPONENTS))
+
+    def level_draws(parameters, ramp):
+        weights = np.asarray(component_weights(**parameters))
+        conditional = {
+            name: [
+                np.asarray(v)
+                for v in bias_given_noise(level, jnp.asarray(weights), jnp.asarray(ramp))
+            ]
+            for name, level in levels.items()
+        }
+        return conditional, weights @ drift
+
+    shape = next(iter(noise.draws.values())).shape
+    parameters = {
+        name: noise.draws[name] for name in ("N", "B", "K", "Q", "F") if name in noise.draws
+    }
+    conditional, drift_variance = level_draws(parameters, noise.draws.get("R", np.zeros(shape)))
+    level_up = conditional["up"][0] + np.sqrt(conditional["up"][1]) * rng.standard_normal(shape)
+    level_down = conditional["down"][0] + np.sqrt(conditional["down"][1]) * rng.standard_normal(
+        shape
+    )
+    g_local = gravity.value + gravity.uncertainty * rng.standard_normal(shape)
+    drift_draw = np.sqrt(drift_variance) * rng.standard_normal(shape)
+    span = level_up - level_down + drift_draw
+    draws = {
+        "scale": 2 * g_local / span,
+        "offset": (level_up + level_down - drift_draw) / 2,
+        "g_local": g_local,
+        "level_up": level_up,
+        "level_down": level_down,
+    }
+
+    map_parameters = {name: np.asarray(noise.parameters[name].map) for name in parameters}
+    ramp_map = np.asarray(noise.parameters["R"].map if "R" in noise.parameters else 0.0)
+    conditional, drift_at_map = level_draws(map_parameters, ramp_map)
+    (up_mean, up_var), (down_mean, down_var) = conditional["up"], conditional["down"]
+    span_map = float(up_mean - down_mean)
+    span_var = float(up_var + down_var + drift_at_map)
+    scale_map = 2 * gravity.value / span_map
+    map_values = {
+        "scale": scale_map,
+        "offset": float(up_mean + down_mean) / 2,
+        "g_local": gravity.value,
+    }
+    map_sd = {
+        "scale": scale_map
+        * math.hypot(math.sqrt(span_var) / span_map, gravity.uncertainty / gravity.value),
+        "offset": math.sqrt(float(up_var + down_var + drift_at_map)) / 2,
+        "g_local": gravity.uncertainty,
+    }
+    return BayesianTwoPosition(draws, map_values, map_sd, noise)
+
+
+@dataclass(frozen=True)
+class TwoPositionCalibration:
+    """A two-position calibration of one accelerometer axis (:func:`calibrate_two_position`):
+    the classical answer (each entry ``(value, half-width at confidence)``) and the posterior
+    (draws of scale, offset and g_local, MAP with Laplace sd, the noise posterior)."""
+
+    channel: str
+    unit: str
+    rate_hz: float
+    up: Section
+    down: Section
+    gravity: LocalGravity
+    confidence: float
+    classical: dict
+    """mean_up, mean_down, span, scale, offset, g_local: (value, half-width)."""
+    bayesian: BayesianTwoPosition | None
+
+    @property
+    def passed(self) -> bool:
+        return self.bayesian is None or bool(self.bayesian.noise.diagnostics.passed)
+
+    def check(self) -> "TwoPositionCalibration":
+        """Raise :class:`~bayescal.HealthCheckError` when the posterior failed its checks."""
+        if not self.passed:
+            raise HealthCheckError(
+                "two-position: posterior checks failed: "
+                + "; ".join(self.bayesian.noise.diagnostics.failures)
+            )
+        return self
+
+
+def calibrate_two_position(
+    up,
+    down,
+    rate_hz: float,
+    *,
+    gravity: LocalGravity,
+    unit: str = "m/s^2",
+    channel: str = "acc",
+    gap_s: float | None = None,
+    terms=DEFAULT_TERMS,
+    confidence: float = 0.95,
+    bayesian: bool = True,
+    seed: int = 0,
+    progress: bool = False,
+) -> TwoPositionCalibration:
+    """Scale factor and offset of one accelerometer axis from a section held up and one held
+    down.
+
+    Parameters
+    ----------
+    up, down : array_like or Section
+        The readings of each section (``unit``; NaN marks a missing sample).
+    rate_hz : float
+        Sample rate, Hz.
+    gravity : LocalGravity
+        Local gravity (:func:`~bayescal.local_gravity`, or :meth:`LocalGravity.measured`).
+    unit : str
+        The readings' unit (m/s^2, g, or a count unit such as LSB).
+    gap_s : float, optional
+        Seconds between the starts of the two sections when they come from one recording:
+        the offset may then drift between them by the noise model's own random walk and
+        flicker.
+    terms : str or tuple of str
+        Noise terms of the Bayesian model (as :func:`~bayescal.fit_noise`).
+    confidence : float
+        Confidence of the classical half-widths.
+    bayesian : bool
+        Also the posterior (else the classical answer only).
+    seed : int
+        The same inputs and seed give the same posterior.
+
+    Returns
+    -------
+    TwoPositionCalibration
+
+    Raises
+    ------
+    InputError
+        A moving section, sections not opposite, a span far from 2 g in an acceleration unit.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bayescal as bc
+    >>> rng = np.random.default_rng(0)
+    >>> g = bc.local_gravity(45.0)
+    >>> up = 0.03 + g.value / 1.002 + 0.004 * rng.standard_normal(6000)
+    >>> down = 0.03 - g.value / 1.002 + 0.004 * rng.standard_normal(6000)
+    >>> calibration = bc.calibrate_two_position(up, down, 100.0, gravity=g, bayesian=False)
+    >>> round(calibration.classical["scale"][0], 3)
+    1.002
+    """
+    up, down = (
+        section
+        if isinstance(section, Section)
+        else Section(np.asarray(section, float), 0.0, "<array>")
+        for section in (up, down)
+    )
+    terms = parse_terms(terms) if isinstance(terms, str) else tuple(terms)
+    check_sections(up, down, unit, channel)
+    classical = classical_two_position(up.values, down.values, gravity, confidence)
+    posterior = (
+        bayesian_two_position(
+            up, down, rate_hz, gravity, terms=terms, gap_s=gap_s, seed=seed, progress=progress
+        )
+        if bayesian
+        else None
+    )
+    return TwoPositionCalibration(
+        channel, unit, float(rate_hz), up, down, gravity, confidence, classical, posterior
+    )

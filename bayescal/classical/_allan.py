@@ -1,0 +1,395 @@
+"""Allan, modified Allan and Hadamard deviations with confidence intervals.
+
+The estimators are those of NIST SP 1065 (Riley 2008), written on the phase x, the time
+integral of the rate y (x_k = tau0 * sum_{i<k} y_i; for a gyro the angle, for an
+accelerometer the velocity):
+
+- Allan variance, eq. (11) overlapping / eq. (7) non-overlapping:
+  sigma^2(tau) = sum (x_{i+2m} - 2 x_{i+m} + x_i)^2 / (2 tau^2 n_terms);
+- modified Allan variance, eq. (14): the inner m-sums of those second differences, squared,
+  divided by 2 m^2 tau^2 n_terms;
+- Hadamard variance, eq. (17): third differences x_{i+3m} - 3 x_{i+2m} + 3 x_{i+m} - x_i,
+  squared, divided by 6 tau^2 n_terms.
+
+The sums run in compiled loops (numba) that read the phase once per averaging factor and keep
+no temporaries, which is what makes 10^7-sample records fast. ``NaN`` in ``y`` marks missing
+samples: terms that would span one are left out (the gap-tolerant estimator), which is how
+``--gaps split`` pools the segments of a recording without bridging its gaps.
+"""
+
+import functools
+import math
+from typing import Literal
+
+import equinox as eqx
+import numba
+import numpy as np
+
+from .._errors import InputError
+from ._edf import deviation_interval, equivalent_degrees_of_freedom, identify_noise_exponent
+
+TauSpec = Literal["octave", "decade", "all"] | int | np.ndarray | list
+
+
+class DeviationResult(eqx.Module):
+    """An Allan-family deviation at each averaging time, with its confidence interval.
+
+    Arrays over averaging times are last; leading axes are those of the input less ``axis``.
+    """
+
+    tau: np.ndarray
+    """Averaging times tau = m / rate, in seconds."""
+    m: np.ndarray
+    """Averaging factors (samples per average)."""
+    deviation: np.ndarray
+    """The deviation, in the unit of the rate signal."""
+    ci_low: np.ndarray
+    ci_high: np.ndarray
+    n: np.ndarray
+    """Number of terms in each estimate (Stable32's "#" column)."""
+    edf: np.ndarray
+    """Equivalent degrees of freedom (Greenhall & Riley 2003)."""
+    alpha: np.ndarray
+    """Power-law exponent of S_y(f) used for the EDF (identified, or as given)."""
+    confidence: float = eqx.field(static=True)
+    estimator: str = eqx.field(static=True)
+
+
+@numba.njit(parallel=True, cache=True)
+def _difference_sums(phase, missing, factors, order, overlapping):  # pragma: no cover - compiled
+    """Sum of squared lag-m differences of order 2 or 3 and the number of terms, per lane
+    and factor; ``missing`` is the running count of missing samples (empty when none)."""
+    lanes, length = phase.shape
+    n_factors = factors.size
+    sums = np.zeros((lanes, n_factors))
+    counts = np.zeros((lanes, n_factors), dtype=np.int64)
+    gapped = missing.shape[1] > 0
+    for job in numba.prange(lanes * n_factors):
+        lane = job // n_factors
+        index = job % n_factors
+        m = factors[index]
+        x = phase[lane]
+        step = 1 if overlapping else m
+        total = 0.0
+        terms = 0
+        for k in range(0, length - order * m, step):
+            if gapped and missing[lane, k + order * m] != missing[lane, k]:
+                continue
+            if order == 2:
+                value = x[k + 2 * m] - 2.0 * x[k + m] + x[k]
+            else:
+                value = x[k + 3 * m] - 3.0 * x[k + 2 * m] + 3.0 * x[k + m] - x[k]
+            total += value * value
+            terms += 1
+        sums[lane, index] = total
+        counts[lane, index] = terms
+    return sums, counts
+
+
+@numba.njit(parallel=True, cache=True)
+def _modified_sums(phase, missing, factors):  # pragma: no cover - compiled
+    """Sum over j of (sum_{i=j}^{j+m-1} second difference_i)^2, and the number of terms."""
+    lanes, length = phase.shape
+    n_factors = factors.size
+    sums = np.zeros((lanes, n_factors))
+    counts = np.zeros((lanes, n_factors), dtype=np.int64)
+    gapped = missing.shape[1] > 0
+    for job in numba.prange(lanes * n_factors):
+        lane = job // n_factors
+        index = job % n_factors
+        m = factors[index]
+        x = phase[lane]
+        n_windows = length - 3 * m + 1
+        if n_windows < 1:
+            continue
+        window = 0.0
+        for i in range(m):
+            window += x[i + 2 * m] - 2.0 * x[i + m] + x[i]
+        total = 0.0
+        terms = 0
+        for j in range(n_windows):
+            if j > 0:
+                last = j + m - 1
+                window += (
+                    x[last + 2 * m]
+                    - 2.0 * x[last + m]
+                    + x[last]
+                    - (x[j + 2 * m - 1] - 2.0 * x[j + m - 1] + x[j - 1])
+                )
+            if gapped and missing[lane, j + 3 * m - 1] != missing[lane, j]:
+                continue
+            total += window * window
+            terms += 1
+        sums[lane, index] = total
+        counts[lane, index] = terms
+    return sums, counts
+
+
+class _Estimator(eqx.Module):
+    name: str
+    order: int
+    overlapping: bool
+    modified: bool
+    normalisation: float  # sigma^2 = sums / (normalisation * tau^2 * n_terms [* m^2 if modified])
+
+    def span(self, m):
+        """Phase points one term spans, less one."""
+        return 3 * m - 1 if self.modified else self.order * m
+
+    def equivalent_phase_points(self, m, n_terms):
+        """Phase points of a gap-free record that gives ``n_terms`` terms."""
+        if self.overlapping:
+            return n_terms + self.span(m)
+        return (n_terms + self.order - 1) * m + 1
+
+
+_ALLAN = _Estimator("oadev", 2, True, False, 2.0)
+_ALLAN_NON_OVERLAPPING = _Estimator("adev", 2, False, False, 2.0)
+_MODIFIED = _Estimator("mdev", 2, True, True, 2.0)
+_HADAMARD = _Estimator("ohdev", 3, True, False, 6.0)
+_HADAMARD_NON_OVERLAPPING = _Estimator("hdev", 3, False, False, 6.0)
+
+
+def averaging_factors(taus: TauSpec, n_phase: int, rate: float, *, longest: int) -> np.ndarray:
+    """Averaging factors m for a tau specification.
+
+    ``"octave"``: m = 1, 2, 4, ...; ``"decade"``: 1, 2, 4 per decade; ``"all"``: every m;
+    an integer N: N log-spaced factors (duplicates dropped); these stop at a quarter of the
+    record (as Stable32 does), where fewer than about four independent averages remain.
+    An array gives averaging times in seconds, each a whole number of sample periods and no
+    longer than ``longest`` samples.
+    """
+    default_top = max(1, min(longest, n_phase // 4))
+    if isinstance(taus, str):
+        if taus == "octave":
+            return 2 ** np.arange(int(math.log2(default_top)) + 1)
+        if taus == "decade":
+            decades = 10 ** np.arange(int(math.log10(default_top)) + 1)
+            factors = (decades[:, None] * np.array([1, 2, 4])).ravel()
+            return factors[factors <= default_top]
+        if taus == "all":
+            return np.arange(1, default_top + 1)
+        raise InputError(
+            f"taus={taus!r} is not a tau grid",
+            fix="use 'octave', 'decade', 'all', a count or averaging times in seconds",
+        )
+    if isinstance(taus, (int, np.integer)):
+        if taus < 1:
+            raise InputError(f"taus={taus} must be a positive count of averaging times")
+        return np.unique(
+            np.round(np.logspace(0, math.log10(default_top), int(taus))).astype(np.int64)
+        )
+    seconds = np.atleast_1d(np.asarray(taus, dtype=float))
+    factors = np.round(seconds * rate).astype(np.int64)
+    off_grid = np.abs(factors - seconds * rate) > 1e-6 * np.maximum(1.0, seconds * rate)
+    if np.any(off_grid) or np.any(factors < 1):
+        bad = seconds[off_grid | (factors < 1)][0]
+        raise InputError(f"taus: {bad:g} s is not a whole number of sample periods (1/{rate:g} s)")
+    if np.any(factors > longest):
+        bad = seconds[factors > longest][0]
+        raise InputError(
+            f"taus: {bad:g} s needs more samples than the record has "
+            f"(longest averaging time here is {longest / rate:g} s)",
+            fix="shorten the averaging time or record longer",
+        )
+    return factors
+
+
+@numba.njit(cache=True)
+def _integrate(lanes, period, with_missing):  # pragma: no cover - compiled
+    """Phase of each lane, x_0 = 0 and x_{k+1} = x_k + (y_k - mean) * period, with missing
+    (NaN) samples read as the mean; and the running count of missing samples."""
+    n_lanes, length = lanes.shape
+    phase = np.zeros((n_lanes, length + 1))
+    missing = np.zeros((n_lanes, length + 1 if with_missing else 0), dtype=np.int64)
+    for lane in range(n_lanes):
+        total = 0.0
+        present = 0
+        for k in range(length):
+            if not np.isnan(lanes[lane, k]):
+                total += lanes[lane, k]
+                present += 1
+        mean = total / max(present, 1)
+        running = 0.0
+        gaps = 0
+        for k in range(length):
+            value = lanes[lane, k]
+            if np.isnan(value):
+                gaps += 1
+            else:
+                running += (value - mean) * period
+            phase[lane, k + 1] = running
+            if with_missing:
+                missing[lane, k + 1] = gaps
+    return phase, missing
+
+
+def _phase_lanes(y: np.ndarray, rate: float, kind: str):
+    """Phase per lane and the running count of missing samples (empty when there are none).
+
+    The mean rate is taken out before integrating: it changes none of these variances and
+    keeps the phase small, so the differences lose no digits to cancellation.
+    """
+    if kind == "rate":
+        return _integrate(y, 1.0 / rate, bool(np.isnan(y).any()))
+    if kind == "phase":
+        if np.isnan(y).any():
+            raise InputError("y: NaN in phase data; gaps are supported for kind='rate' only")
+        index = np.arange(y.shape[1])
+        slope = (y[:, -1:] - y[:, :1]) / max(1, y.shape[1] - 1)
+        return y - y[:, :1] - slope * index, np.zeros((y.shape[0], 0), dtype=np.int64)
+    raise InputError(f"kind={kind!r} must be 'rate' or 'phase'")
+
+
+def _longest_complete_run(phase_lane: np.ndarray, missing_lane: np.ndarray) -> np.ndarray:
+    if missing_lane.size == 0:
+        return phase_lane
+    steps = np.diff(missing_lane) == 0  # True where sample i is present
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], steps.astype(np.int8), [0]))))
+    starts, stops = edges[::2], edges[1::2]
+    best = np.argmax(stops - starts)
+    return phase_lane[starts[best] : stops[best] + 1]
+
+
+def _deviation(estimator: _Estimator, y, rate, taus, axis, kind, confidence, noise_type, ci_method):
+    if not rate > 0:
+        raise InputError(f"rate={rate!r} must be a positive sample rate in Hz")
+    if not 0 < confidence < 1:
+        raise InputError(f"confidence={confidence!r} must lie between 0 and 1")
+    values = np.moveaxis(np.asarray(y, dtype=float), axis, -1)
+    lead_shape = values.shape[:-1]
+    lanes = values.reshape(-1, values.shape[-1])
+    phase, missing = _phase_lanes(lanes, float(rate), kind)
+    n_phase = phase.shape[1]
+    longest = n_phase // 3 if estimator.modified else (n_phase - 1) // estimator.order
+    if longest < 1:
+        raise InputError(f"y: {values.shape[-1]} samples are too few for a {estimator.name}")
+    factors = averaging_factors(taus, n_phase, float(rate), longest=longest)
+    if estimator.modified:
+        sums, counts = _modified_sums(phase, missing, factors)
+        sums = sums / factors.astype(float) ** 2
+    else:
+        sums, counts = _difference_sums(
+            phase, missing, factors, estimator.order, estimator.overlapping
+        )
+    tau = factors / float(rate)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        deviation = np.sqrt(sums / (estimator.normalisation * tau**2 * counts))
+
+    max_differences = 3 if estimator.order == 3 else 2
+    alpha = np.empty(counts.shape, dtype=np.int64)
+    edf = np.full(counts.shape, np.nan)
+    edf_of = functools.cache(
+        lambda noise, m, terms: equivalent_degrees_of_freedom(
+            noise,
+            estimator.order,
+            m,
+            estimator.equivalent_phase_points(m, terms),
+            overlapping=estimator.overlapping,
+            modified=estimator.modified,
+            phase_averaged=ci_method == "stable32",
+        )
+    )
+    for lane in range(lanes.shape[0]):
+        complete = (
+            _longest_complete_run(phase[lane], missing[lane]) if noise_type == "auto" else None
+        )
+        for index, m in enumerate(factors.tolist()):
+            if noise_type != "auto":
+                alpha[lane, index] = int(noise_type)
+            elif complete.size > 2 * m:
+                alpha[lane, index] = identify_noise_exponent(
+                    complete, m, max_differences=max_differences
+                )
+            else:
+                alpha[lane, index] = 0
+            if counts[lane, index] > 0:
+                edf[lane, index] = edf_of(int(alpha[lane, index]), m, int(counts[lane, index]))
+    ci_low, ci_high = deviation_interval(deviation, edf, confidence, ci_method)
+    shape = (*lead_shape, factors.size)
+    return DeviationResult(
+        tau=tau,
+        m=factors,
+        deviation=deviation.reshape(shape),
+        ci_low=ci_low.reshape(shape),
+        ci_high=ci_high.reshape(shape),
+        n=counts.reshape(shape),
+        edf=edf.reshape(shape),
+        alpha=alpha.reshape(shape),
+        confidence=float(confidence),
+        estimator=estimator.name,
+    )
+
+
+def allan_deviation(
+    y,
+    rate: float,
+    taus: TauSpec = "octave",
+    *,
+    axis: int = -1,
+    kind: str = "rate",
+    overlapping: bool = True,
+    confidence: float = 0.95,
+    noise_type: int | Literal["auto"] = "auto",
+    ci_method: str = "exact",
+) -> DeviationResult:
+    """Allan deviation of a rate signal, with chi-square confidence intervals.
+
+    Parameters
+    ----------
+    y : array_like
+        Rate (frequency-like) samples, e.g. a gyro in deg/s; with ``kind="phase"`` the
+        integrated signal (angle) instead. NaN marks a missing sample (rate data only).
+    rate : float
+        Sample rate in Hz; tau = m / rate.
+    taus : "octave", "decade", "all", int or array
+        Averaging times; see :func:`averaging_factors`.
+    axis : int
+        Axis of ``y`` along which time runs.
+    overlapping : bool
+        The overlapping estimator (SP 1065 eq. 11, the default) or the original eq. (7).
+    confidence : float
+        Two-sided confidence of the interval (Stable32 tables use 0.683).
+    noise_type : "auto" or int
+        Power-law exponent alpha of S_y(f) for the EDF, or "auto" to identify it per tau.
+    ci_method : "exact" or "stable32"
+        "exact": EDF for phase point samples (exact for IMU rate samples, see
+        :func:`equivalent_degrees_of_freedom`) and exact chi-square quantiles; "stable32":
+        Greenhall's phase-averaged EDF and Stable32's quantile approximation, to compare with
+        Stable32's tables.
+    """
+    estimator = _ALLAN if overlapping else _ALLAN_NON_OVERLAPPING
+    return _deviation(estimator, y, rate, taus, axis, kind, confidence, noise_type, ci_method)
+
+
+def modified_allan_deviation(
+    y,
+    rate: float,
+    taus: TauSpec = "octave",
+    *,
+    axis: int = -1,
+    kind: str = "rate",
+    confidence: float = 0.95,
+    noise_type: int | Literal["auto"] = "auto",
+    ci_method: str = "exact",
+) -> DeviationResult:
+    """Modified Allan deviation (SP 1065 eq. 14); parameters as :func:`allan_deviation`."""
+    return _deviation(_MODIFIED, y, rate, taus, axis, kind, confidence, noise_type, ci_method)
+
+
+def hadamard_deviation(
+    y,
+    rate: float,
+    taus: TauSpec = "octave",
+    *,
+    axis: int = -1,
+    kind: str = "rate",
+    overlapping: bool = True,
+    confidence: float = 0.95,
+    noise_type: int | Literal["auto"] = "auto",
+    ci_method: str = "exact",
+) -> DeviationResult:
+    """Hadamard deviation (SP 1065 eq. 17, overlapping by default); insensitive to a linear
+    drift of the rate. Parameters as :func:`allan_deviation`."""
+    estimator = _HADAMARD if overlapping else _HADAMARD_NON_OVERLAPPING
+    return _deviation(estimator, y, rate, taus, axis, kind, confidence, noise_type, ci_method)

@@ -1,0 +1,124 @@
+"""``bayescal multi-position``: scale, offset and misalignment of a three-axis accelerometer
+from many still poses."""
+
+from .._errors import InputError
+from ._arguments import (
+    add_recording_arguments,
+    confidence,
+    gravity,
+    grid_options,
+    health_exit,
+    load,
+    progress,
+    seed,
+)
+
+
+def add_parser(commands) -> None:
+    parser = commands.add_parser(
+        "multi-position",
+        help="accelerometer scale, offset and misalignment from many static poses",
+        description="Multi-position calibration of a three-axis accelerometer: per-axis scale, "
+        "offset and the three misalignment angles from still poses, by gravity's magnitude "
+        "alone (free orientations, imu_tk; 10 or more poses in 9 or more orientations) or with "
+        "the six faces of a cube (six-face, Ferraris); classical least squares and Bayesian.",
+    )
+    add_recording_arguments(parser, channel="three", window=False)
+    parser.add_argument(
+        "--sections",
+        metavar="T0:T1,...",
+        help="the still poses in seconds from the first sample (default: found)",
+    )
+    parser.add_argument(
+        "--orientations",
+        default="free",
+        help="free: any orientations, gravity's magnitude only (default); six-face: each pose "
+        "on a face of a cube, every face at least once",
+    )
+    parser.add_argument("--latitude", type=float, metavar="DEG", help="geodetic latitude")
+    parser.add_argument("--height", type=float, metavar="M", help="height above the ellipsoid")
+    parser.add_argument("--g-local", metavar="VALUE[±U]", help="local gravity in m/s^2 instead")
+    parser.add_argument("--confidence", type=confidence, default=0.95)
+    parser.add_argument("--seed", type=seed, default=0)
+    parser.add_argument("--classical-only", action="store_true", help="skip the Bayesian model")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    parser.set_defaults(run=run)
+
+
+def parse_sections(text: str) -> list[tuple[float, float]]:
+    """``--sections T0:T1,T0:T1,...`` in seconds from the first sample."""
+    sections = []
+    for part in text.split(","):
+        try:
+            start, stop = (float(x) for x in part.split(":"))
+        except ValueError:
+            raise InputError(
+                f"--sections {text!r}: cannot read {part.strip()!r}",
+                fix="write START:STOP,START:STOP,... in seconds from the first sample",
+            ) from None
+        if not stop > start:
+            raise InputError(f"--sections: {part.strip()} ends before it starts")
+        sections.append((start, stop))
+    return sections
+
+
+def _read(args):
+    """The three channels on one time base: (values (n, 3), the first channel, notes)."""
+    import numpy as np
+
+    recording = load(args)
+    channels = [recording.channel(name, **grid_options(args)) for name in args.channels]
+    units = {channel.unit for channel in channels}
+    if len(units) > 1:
+        listed = ", ".join(f"{channel.channel} [{channel.unit}]" for channel in channels)
+        raise InputError(
+            f"the channels have different units: {listed}",
+            source=recording.source,
+            fix="give the unit of all three with --unit",
+        )
+    notes = list(dict.fromkeys(note for channel in channels for note in channel.notes))
+    return np.column_stack([channel.values for channel in channels]), channels[0], notes
+
+
+def run(args) -> int:
+    """``bayescal multi-position``: 0 success, 1 a failed posterior health check, 2 bad input."""
+    from .._output import check_writable, write_json
+
+    if args.orientations not in ("free", "six-face"):
+        raise InputError(
+            f"--orientations {args.orientations!r} is not known", fix="choose free or six-face"
+        )
+    if args.json:
+        check_writable(args.json, "--json")
+    local = gravity(args.latitude, args.height, args.g_local)
+    sections = parse_sections(args.sections) if args.sections else None
+    values, first, notes = _read(args)
+    # The analysis's modules load once the input is known to be good.
+    from ..capabilities._multi_position import calibrate_multi_position
+    from ..report._multi_position import multi_position_result, multi_position_text
+
+    try:
+        calibration = calibrate_multi_position(
+            values,
+            first.rate_hz,
+            gravity=local,
+            unit=first.unit,
+            orientations=args.orientations,
+            sections=sections,
+            start_s=first.start_s,
+            confidence=args.confidence,
+            bayesian=not args.classical_only,
+            seed=args.seed,
+            progress=progress(args),
+        )
+    except InputError as error:
+        raise InputError(error.problem, source=first.source, fix=error.fix) from None
+    result = multi_position_result(
+        calibration, source=first.source, channels=args.channels, notes=notes
+    )
+    if args.json:
+        write_json(args.json, result)
+    print(multi_position_text(result))
+    failures = [] if calibration.passed else list(calibration.bayesian.diagnostics.failures)
+    return health_exit("multi-position", failures)

@@ -1,0 +1,167 @@
+"""``bayescal noise``: the noise of one static channel, classical and Bayesian."""
+
+from .._errors import InputError
+from ._arguments import (
+    add_recording_arguments,
+    channel_of,
+    confidence,
+    health_exit,
+    load,
+    output_folder,
+    positive_int,
+    progress,
+    seed,
+    taus,
+)
+
+DEFAULT_TERMS = "white,bias_instability,rate_random_walk"
+
+
+def add_parser(commands) -> None:
+    parser = commands.add_parser(
+        "noise",
+        help="noise of one static channel: bias, Allan deviation, IEEE 952 terms",
+        description="Classical noise analysis of one static channel: bias with its Student-t "
+        "interval and a check of its validity, Allan deviation with chi-square intervals, "
+        "and the IEEE Std 952 slope readings of Q, N, B and K; beside them the posterior of "
+        "the noise model.",
+    )
+    add_recording_arguments(parser, file_optional=True)
+    parser.add_argument(
+        "--example",
+        action="store_true",
+        help="analyse a built-in simulated gyro recording instead of a file",
+    )
+    parser.add_argument(
+        "--seed",
+        type=seed,
+        default=0,
+        help="seed of the posterior (and of the --example recording)",
+    )
+    parser.add_argument(
+        "--confidence",
+        type=confidence,
+        default=0.95,
+        help="confidence of every interval (default 0.95)",
+    )
+    parser.add_argument(
+        "--taus",
+        type=taus,
+        default="octave",
+        help="averaging times: octave (default), decade, all, a number of "
+        "log-spaced taus, or seconds such as 0.1,1,10",
+    )
+    parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    parser.add_argument(
+        "--export",
+        nargs=2,
+        action="append",
+        metavar=("FORMAT", "PATH"),
+        help="also write the channel's noise for another tool: kalibr (imu.yaml) or matlab "
+        "(gyroparams/accelparams script); a file already at PATH keeps the other sensor's "
+        "entries (repeatable)",
+    )
+    bayes = parser.add_argument_group("Bayesian model")
+    bayes.add_argument(
+        "--terms",
+        default=DEFAULT_TERMS,
+        help="noise terms beside the bias: white, bias_instability (flicker), "
+        "rate_random_walk (rrw), quantization, rate_ramp (ramp), output_filter, or all "
+        f"(default: {DEFAULT_TERMS})",
+    )
+    bayes.add_argument(
+        "--sensor",
+        metavar="NAME",
+        help="use a sensor card's datasheet figures as priors (bayescal sensors)",
+    )
+    bayes.add_argument(
+        "--out", metavar="DIR", help="write the posterior (ArviZ netCDF) and the JSON into DIR"
+    )
+    bayes.add_argument(
+        "--walkers", type=positive_int, default=32, help="emcee walkers (default 32)"
+    )
+    bayes.add_argument(
+        "--max-steps",
+        type=positive_int,
+        default=40_000,
+        help="most emcee steps before the convergence check fails",
+    )
+    bayes.add_argument("--classical-only", action="store_true", help="skip the Bayesian model")
+    bayes.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.set_defaults(run=run)
+
+
+def _recording(args):
+    if args.example:
+        if args.file:
+            raise InputError("give a FILE or --example, not both")
+        from ..capabilities._examples import example_recording
+
+        return example_recording(args.seed), args.channel or "gyro_x"
+    if not args.file:
+        raise InputError("no recording given", fix="pass a FILE, or --example to try bayescal")
+    if not args.channel:
+        raise InputError(
+            "--channel is required",
+            source=args.file,
+            fix="name the column to analyse, e.g. --channel gyro_x",
+        )
+    return load(args), args.channel
+
+
+def run(args) -> int:
+    from .._output import check_writable, write_json, write_netcdf
+    from ..models._terms import parse_terms
+
+    terms = parse_terms(args.terms)
+    folder = output_folder(args.out)
+    if args.json:
+        check_writable(args.json, "--json")
+    recording, name = _recording(args)
+    channel, window = channel_of(args, recording, name)
+    # The analysis's modules load once the input is known to be good.
+    from ..capabilities._noise import fit_noise
+    from ..classical._noise import classical_noise
+    from ..report._export import plan_exports, write_exports
+    from ..report._noise import noise_result, noise_text
+
+    exports = plan_exports(args.export, channel.unit, name, channel.source, recording.topic)
+    fit = None
+    if args.classical_only:
+        try:
+            classical = classical_noise(
+                channel.values, channel.rate_hz, confidence=args.confidence, taus=args.taus
+            )
+        except InputError as error:
+            raise InputError(
+                error.problem, source=channel.source, column=name, fix=error.fix
+            ) from None
+    else:
+        fit = fit_noise(
+            channel,
+            terms=terms,
+            sensor=args.sensor,
+            seed=args.seed,
+            confidence=args.confidence,
+            taus=args.taus,
+            n_walkers=args.walkers,
+            max_steps=args.max_steps,
+            progress=progress(args),
+        )
+        classical = fit.classical
+    result = noise_result(fit or channel, classical, window, fit.fit if fit else None)
+    result["notes"] = window.pop("notes", []) + result["notes"]
+    if args.json:
+        write_json(args.json, result)
+    exported = write_exports(exports, result)
+    if folder is not None:
+        folder.mkdir(exist_ok=True)
+        stem = f"noise_{name}"
+        if fit is not None:
+            write_netcdf(fit.posterior, folder / f"{stem}_posterior.nc")
+        write_json(folder / f"{stem}.json", result)
+    print(noise_text(result))
+    for line in exported:
+        print(line)
+    failures = [] if fit is None else [f"{name}: {failure}" for failure in fit.failures]
+    return health_exit("noise", failures)

@@ -1,0 +1,145 @@
+"""``bayescal report`` and ``bayescal demo``: the HTML report of a sensor, and the report of a
+simulated one."""
+
+from pathlib import Path
+
+from ._arguments import (
+    add_recording_arguments,
+    confidence,
+    health_exit,
+    load,
+    output_folder,
+    positive_float,
+    positive_int,
+    progress,
+    seed,
+    taus,
+    window,
+)
+
+DEFAULT_TERMS = "white,bias_instability,rate_random_walk"
+
+
+def add_parser(commands) -> None:
+    report = commands.add_parser(
+        "report",
+        help="HTML report of a sensor: noise of every channel, classical and Bayesian",
+        description="Run the noise analysis (classical and Bayesian) on each channel of one "
+        "recording and write one self-contained HTML page (figures embedded, opens offline) "
+        "with the JSON and the ArviZ netCDF behind it.",
+    )
+    add_recording_arguments(report, channel="many")
+    report.add_argument(
+        "--out", default="report", metavar="DIR", help="output folder (default: report)"
+    )
+    report.add_argument(
+        "--sensor",
+        metavar="NAME",
+        help="sensor card: its datasheet figures become priors and the page compares the "
+        "measured unit with them (bayescal sensors)",
+    )
+    report.add_argument("--title", help="title of the page (default: from the file name)")
+    report.add_argument("--confidence", type=confidence, default=0.95)
+    report.add_argument("--taus", type=taus, default="octave")
+    report.add_argument(
+        "--terms",
+        default=DEFAULT_TERMS,
+        help=f"noise terms (as for noise; default {DEFAULT_TERMS})",
+    )
+    report.add_argument("--seed", type=seed, default=0)
+    report.add_argument("--walkers", type=positive_int, default=32)
+    report.add_argument("--max-steps", type=positive_int, default=40_000)
+    report.add_argument("--quiet", action="store_true", help="no progress bar")
+    report.add_argument(
+        "--discover",
+        action="store_true",
+        help="also run discovery (bayescal discover) on each channel and show its findings",
+    )
+    report.set_defaults(run=run)
+
+    demo = commands.add_parser(
+        "demo",
+        help="simulate a 6-axis IMU and write its report (start here)",
+        description="Simulate a MEMS 6-axis IMU with bayescal's own noise model (100 Hz, "
+        "25 minutes, with an effect hidden in it), write the recording as CSV and its report.",
+    )
+    demo.add_argument(
+        "--out", default="bayescal-demo", metavar="DIR", help="folder (default: bayescal-demo)"
+    )
+    demo.add_argument("--seed", type=seed, default=0, help="seed of the simulation and the fit")
+    demo.add_argument(
+        "--minutes",
+        type=positive_float,
+        default=25.0,
+        help="length of the simulated recording (default 25)",
+    )
+    demo.add_argument("--quiet", action="store_true", help="no progress bar")
+    demo.set_defaults(run=run_demo)
+
+
+def _health(outcome, command: str) -> int:
+    return health_exit(
+        command,
+        [f"{a.channel}: {', '.join(a.fit.diagnostics.failures)}" for a in outcome.failed],
+    )
+
+
+def run(args) -> int:
+    from ..recording._columns import default_channels
+    from ..report._discovery import discovery_findings
+    from ..report._report import report_recording, summary_text
+
+    folder = output_folder(args.out)
+    recording = load(args)
+    channels = (
+        [part.strip() for part in args.channels.split(",") if part.strip()]
+        if args.channels
+        else default_channels(recording)
+    )
+    start, stop, described = window(args, recording)
+    discoveries = None
+    if args.discover:
+
+        def discoveries(recording, channel):
+            return discovery_findings(recording, channel, seed=args.seed)
+
+    outcome = report_recording(
+        recording,
+        channels,
+        folder,
+        stem=Path(args.file).stem,
+        title=args.title,
+        sensor=args.sensor,
+        terms=args.terms,
+        confidence=args.confidence,
+        taus=args.taus,
+        seed=args.seed,
+        n_walkers=args.walkers,
+        max_steps=args.max_steps,
+        rate=args.rate,
+        time_column=args.time_column,
+        time_unit=args.time_unit,
+        gaps=args.gaps,
+        start=start,
+        stop=stop,
+        window=described,
+        discoveries=discoveries,
+        progress=progress(args),
+    )
+    print(f"bayescal report: {recording.source}")
+    print(summary_text(outcome))
+    return _health(outcome, "report")
+
+
+def run_demo(args) -> int:
+    from ..report._demo import write_demo
+    from ..report._report import summary_text
+
+    folder = output_folder(args.out)
+    csv_path, outcome = write_demo(
+        folder, seed=args.seed, minutes=args.minutes, progress=progress(args)
+    )
+    print(f"bayescal demo: simulated recording {csv_path} (truth in {folder / 'demo_truth.json'})")
+    print(summary_text(outcome))
+    print(f"open {outcome.html.resolve().as_uri()}")
+    return _health(outcome, "demo")

@@ -1,0 +1,300 @@
+"""``bayescal thermal fit | update | compensate``: the thermal bias of a gyro."""
+
+import math
+import sys
+
+import numpy as np
+
+from .._errors import InputError
+from ._arguments import (
+    add_recording_arguments,
+    confidence,
+    grid_options,
+    health_exit,
+    load,
+    progress,
+    seed,
+)
+
+NOISE_TERMS = "white,bias_instability,rate_random_walk"
+MAX_DEGREE = 4
+
+
+def add_parser(commands) -> None:
+    thermal = commands.add_parser("thermal", help="thermal bias of a gyro: fit, update, compensate")
+    steps = thermal.add_subparsers(dest="step", required=True, parser_class=type(thermal))
+
+    def recording(parser):
+        add_recording_arguments(parser, window=False, temperature=True)
+
+    fit = steps.add_parser("fit", help="fit a thermal bias polynomial")
+    recording(fit)
+    fit.add_argument("--degree", default="auto", help="polynomial degree, or auto (default)")
+    fit.add_argument(
+        "--reference",
+        type=float,
+        metavar="T0",
+        help="reference temperature (default: the middle of the range)",
+    )
+    fit.add_argument(
+        "--terms",
+        default=NOISE_TERMS,
+        help="noise terms beside the thermal bias (as for noise; no ramp)",
+    )
+    fit.add_argument(
+        "--latitude", type=float, metavar="DEG", help="take the Earth rate off (with --axis)"
+    )
+    fit.add_argument(
+        "--axis",
+        default="up",
+        help="direction of the gyro axis: up, down, north, "
+        "south, east, west or east,north,up components (default up)",
+    )
+    fit.add_argument("--confidence", type=confidence, default=0.95)
+    fit.add_argument("--seed", type=seed, default=0)
+    fit.add_argument("--quiet", action="store_true")
+    fit.add_argument("--json", metavar="PATH", required=True, help="calibration file to write")
+    fit.set_defaults(run=run_fit)
+
+    update = steps.add_parser("update", help="update a calibration with alignment data")
+    recording(update)
+    update.add_argument("--calibration", required=True, metavar="PATH")
+    update.add_argument(
+        "--offset-measurement",
+        metavar="M±U[,M±U...]",
+        help="the common offset of each alignment period, measured separately, "
+        "in the channel's unit",
+    )
+    update.add_argument(
+        "--periods",
+        metavar="T0:T1,...",
+        help="alignment periods in seconds (default: the record's gap-free runs)",
+    )
+    update.add_argument(
+        "--drift",
+        default="auto",
+        metavar="S|auto",
+        help="how far the bias may have moved since the calibration, in the channel's unit "
+        "(about that much at T0, each polynomial term about that much at the edge of the "
+        "calibrated range); auto (default) learns it from the data, 0 assumes no change",
+    )
+    update.add_argument("--latitude", type=float, metavar="DEG")
+    update.add_argument("--axis", default="up")
+    update.add_argument("--seed", type=seed, default=0)
+    update.add_argument("--quiet", action="store_true")
+    update.add_argument("--json", metavar="PATH", required=True, help="updated calibration file")
+    update.set_defaults(run=run_update)
+
+    compensate = steps.add_parser("compensate", help="subtract the thermal bias from the output")
+    recording(compensate)
+    compensate.add_argument("--calibration", required=True, metavar="PATH")
+    compensate.add_argument("--out", required=True, metavar="CSV", help="compensated recording")
+    compensate.set_defaults(run=run_compensate)
+
+
+def _channel(args):
+    """The gyro channel with its temperature on its grid, and the temperature column."""
+    from ..recording._columns import find_temperature_column
+
+    if not args.channel:
+        raise InputError("--channel is required", fix="name the gyro column, e.g. --channel gyro_z")
+    recording = load(args)
+    column = find_temperature_column(recording, args.temperature)
+    return recording.channel(args.channel, temperature=column, **grid_options(args)), column
+
+
+def _degree(text: str) -> int | str:
+    if text == "auto":
+        return text
+    try:
+        degree = int(text)
+    except ValueError:
+        degree = -1
+    if not 0 <= degree <= MAX_DEGREE:
+        raise InputError(f"--degree {text!r}", fix=f"give auto or a whole number 0..{MAX_DEGREE}")
+    return degree
+
+
+def run_fit(args) -> int:
+    from .._output import check_writable
+
+    check_writable(args.json, "--json")
+    degree = _degree(args.degree)
+    channel, column = _channel(args)
+    # The analysis's modules load once the input is known to be good.
+    from ..capabilities._thermal import fit_thermal
+    from ..report._thermal import thermal_text
+
+    calibration = fit_thermal(
+        channel.values,
+        channel.temperature,
+        channel.rate_hz,
+        degree=degree,
+        reference=args.reference,
+        terms=args.terms,
+        unit=channel.unit,
+        channel=channel.channel,
+        latitude=args.latitude,
+        axis=args.axis,
+        confidence=args.confidence,
+        seed=args.seed,
+        source=channel.source,
+        temperature_name=column,
+        progress=progress(args),
+    )
+    calibration.save(args.json)
+    print(thermal_text(calibration.to_document()))
+    return health_exit("thermal fit", [] if calibration.passed else calibration.failures)
+
+
+def _parse_measurements(text: str | None, count: int) -> list:
+    from ..recording._units import parse_measurement
+
+    if not text:
+        return [None] * count
+    parsed = []
+    for part in text.split(","):
+        try:
+            value, uncertainty = parse_measurement(part)
+        except ValueError:
+            value, uncertainty = math.nan, None
+        if not (math.isfinite(value) and uncertainty and uncertainty > 0):
+            raise InputError(
+                f"--offset-measurement {part!r}",
+                fix="write it like 0.002±0.001 (a value and a positive uncertainty)",
+            )
+        parsed.append((value, uncertainty))
+    if len(parsed) == 1:
+        parsed = parsed * count
+    if len(parsed) != count:
+        raise InputError(
+            f"--offset-measurement gives {len(parsed)} values for {count} periods",
+            fix="give one for all periods or one per period",
+        )
+    return parsed
+
+
+def _periods(channel, given: str | None) -> tuple[tuple[int, int], ...]:
+    from ..capabilities._thermal import gap_free_runs
+
+    if not given:
+        return gap_free_runs(channel.values)
+    time = channel.time_s
+    periods = []
+    for part in given.split(","):
+        try:
+            start, stop = (float(x) for x in part.split(":"))
+        except ValueError:
+            raise InputError(f"--periods {given!r}", fix="write T0:T1,T0:T1 in seconds") from None
+        keep = np.flatnonzero((time >= start) & (time < stop))
+        if keep.size < 16:
+            raise InputError(f"--periods: {part} holds {keep.size} samples", fix="widen it")
+        periods.append((int(keep[0]), int(keep[-1]) + 1))
+    return tuple(periods)
+
+
+def _parse_drift(text: str) -> float | str | None:
+    if text.strip().lower() == "auto":
+        return "auto"
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0):
+        raise InputError(
+            f"--drift {text!r}",
+            fix="give auto, 0 (no change since the calibration) or a positive scale in the "
+            "channel's unit",
+        )
+    return value or None
+
+
+def _same_earth_rate(args, calibration, unit: str) -> None:
+    """An update takes off the Earth rate its calibration took off; ``--latitude`` and
+    ``--axis`` may only confirm it."""
+    from ..models.effects.earth_rotation import earth_rate_on_axis
+
+    given = earth_rate_on_axis(args.latitude, args.axis, unit)
+    taken = (calibration.earth_rate or {}).get("value")
+    if taken is None or not math.isclose(given, taken, rel_tol=1e-9, abs_tol=1e-15):
+        had = f"{taken:.6g} {unit}" if taken is not None else "none"
+        raise InputError(
+            f"--latitude {args.latitude:g} --axis {args.axis}: an Earth rate of {given:.6g} "
+            f"{unit}, but the calibration took off {had}",
+            source=args.calibration,
+            fix="leave --latitude and --axis out: the update takes off what its calibration did",
+        )
+
+
+def run_update(args) -> int:
+    from .._output import check_writable
+
+    check_writable(args.json, "--json")
+    drift = _parse_drift(args.drift)
+    channel, _ = _channel(args)
+    # The analysis's modules load once the input is known to be good.
+    from ..capabilities._thermal import load_thermal_calibration
+    from ..report._thermal import thermal_text
+
+    calibration = load_thermal_calibration(args.calibration, unit=channel.unit)
+    if args.latitude is not None:
+        _same_earth_rate(args, calibration, channel.unit)
+    periods = _periods(channel, args.periods)
+    updated = calibration.update(
+        channel.values,
+        channel.temperature,
+        channel.rate_hz,
+        periods=periods,
+        offsets=_parse_measurements(args.offset_measurement, len(periods)),
+        drift=drift,
+        seed=args.seed,
+        source=channel.source,
+        progress=progress(args),
+    )
+    updated.save(args.json)
+    print(thermal_text(updated.to_document()))
+    return health_exit("thermal update", [] if updated.passed else updated.failures)
+
+
+def run_compensate(args) -> int:
+    from pathlib import Path
+
+    from .._output import write_csv
+    from ..capabilities._thermal import load_thermal_calibration
+    from ..recording._columns import find_temperature_column
+    from ..recording._recording import resolve_unit
+
+    recording = load(args)
+    column = find_temperature_column(recording, args.temperature)
+    out = Path(args.out)
+    if not out.parent.is_dir():
+        raise InputError(f"--out {out}: folder '{out.parent}' does not exist")
+    if not args.channel:
+        raise InputError("--channel is required", fix="name the gyro column, e.g. --channel gyro_z")
+    values = recording.require(args.channel, "channel")
+    unit, note = resolve_unit(recording, args.channel, args.unit)
+    calibration = load_thermal_calibration(args.calibration, unit=unit)
+    temperature = recording.require(column, "temperature column")
+    compensated, spread = calibration.compensate(values, temperature)
+    outside = calibration.outside_range(temperature)
+    if outside.any():
+        low, high = calibration.temperature_range
+        distance = float(np.max(np.maximum(low - temperature, temperature - high)[outside]))
+        print(
+            f"bayescal thermal compensate: warning: {int(outside.sum())} samples "
+            f"({100 * outside.mean():.3g}%) lie outside the calibrated range [{low:.4g}, "
+            f"{high:.4g}] {calibration.temperature_unit}, by up to {distance:.3g}: the "
+            "polynomial is extrapolated there",
+            file=sys.stderr,
+        )
+    columns = dict(recording.columns)
+    columns[f"{args.channel}_compensated"] = compensated
+    columns[f"{args.channel}_compensated_sd"] = spread
+    write_csv(out, columns)
+    if note:
+        print(f"bayescal thermal compensate: note: {note}", file=sys.stderr)
+    print(
+        f"bayescal thermal compensate: wrote {out} ({values.size} rows; {args.channel} minus "
+        f"the thermal bias of {args.calibration}, with its sd)"
+    )
+    return 0

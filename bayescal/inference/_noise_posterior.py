@@ -1,0 +1,143 @@
+"""The posterior of a channel's noise parameters: the MAP with its Laplace covariance, then
+emcee from it, checked; the bias drawn for each posterior draw from its exact Gaussian
+conditional (:func:`bayescal.models._level.bias_given_noise`)."""
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from ..models._level import bias_given_noise
+from ..models._noise_problem import NoiseProblem
+from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
+from ._optimize import Mode, maximum_a_posteriori
+
+
+def noise_mode(problem: NoiseProblem) -> Mode:
+    """The MAP from two starts — the prior centres (the Allan bounds) and a point well below
+    them, where the terms a record does not hold sit."""
+    base = jnp.asarray(problem.prior.location)
+    lowered = base - 3.0 * jnp.array([p != "R" for p in problem.parameters])
+    return maximum_a_posteriori(NoiseProblem.log_posterior, problem, (base, lowered))
+
+
+class ParameterSummary(eqx.Module):
+    mean: float
+    sd: float
+    q05: float
+    q95: float
+    map: float
+    map_sd: float
+    """Laplace (Hessian) standard deviation at the MAP, by the delta method."""
+
+
+class NoisePosterior(eqx.Module):
+    """Posterior of the noise model of one channel, with its point estimate and checks."""
+
+    parameters: dict
+    """name -> :class:`ParameterSummary`, in the channel's units."""
+    diagnostics: Diagnostics
+    draws: dict
+    """name -> (walkers, draws) posterior draws, bias included."""
+    log_posterior: np.ndarray
+    """(walkers, draws) log posterior density of each draw."""
+    pointwise_log_likelihood: np.ndarray
+    """(walkers, draws, bins) Whittle log-likelihood of each frequency bin."""
+    map_theta: np.ndarray
+    laplace_covariance: np.ndarray
+    problem: NoiseProblem
+    terms: tuple[str, ...] = eqx.field(static=True)
+    seed: int = eqx.field(static=True)
+
+
+@eqx.filter_jit
+def _draw_quantities(problem: NoiseProblem, kept, key):
+    """Parameter values, bias draws (from its Gaussian conditional) and the pointwise
+    log-likelihood for each kept posterior draw."""
+    natural = problem.natural(kept)
+    mean, variance = bias_given_noise(problem.level, problem.variances(kept), problem.ramp(kept))
+    natural["bias"] = mean + jnp.sqrt(variance) * jax.random.normal(key, mean.shape)
+    pointwise = jax.vmap(jax.vmap(problem.pointwise_log_likelihood))(kept)
+    log_posterior = jax.vmap(jax.vmap(problem.log_posterior))(kept)
+    return natural, pointwise, log_posterior
+
+
+@eqx.filter_jit
+def _bias_at(problem: NoiseProblem, theta):
+    """Bias mean and variance at ``theta``, and its change per unit of the ramp R."""
+    variances, ramp = problem.variances(theta), problem.ramp(theta)
+    mean, variance = bias_given_noise(problem.level, variances, ramp)
+    return mean, variance, mean - bias_given_noise(problem.level, variances, ramp + 1.0)[0]
+
+
+def sample_noise(
+    problem: NoiseProblem,
+    *,
+    terms: tuple[str, ...],
+    seed: int = 0,
+    n_walkers: int = 32,
+    max_steps: int = 40_000,
+    progress: bool = False,
+) -> NoisePosterior:
+    """MAP, Laplace covariance and emcee posterior of a :class:`NoiseProblem`, checked."""
+    rng = np.random.default_rng(seed)
+    estimate = noise_mode(problem)
+    sampler, converged = sample_ensemble(
+        batch_log_density(NoiseProblem.log_posterior, problem),
+        estimate.theta,
+        estimate.covariance,
+        rng,
+        walker_count(estimate.theta.size, n_walkers),
+        max_steps,
+        progress,
+    )
+    diagnostics, kept = diagnose(sampler, problem.parameters, converged, estimate.converged)
+    natural, pointwise, log_posterior = _draw_quantities(
+        problem, jnp.asarray(kept), jax.random.PRNGKey(int(rng.integers(2**31)))
+    )
+    natural = {name: np.asarray(value) for name, value in natural.items()}
+    map_values, map_sd = _map_summary(problem, estimate)
+    summaries = {
+        name: ParameterSummary(
+            float(np.mean(natural[name])),
+            float(np.std(natural[name], ddof=1)),
+            float(np.quantile(natural[name], 0.05)),
+            float(np.quantile(natural[name], 0.95)),
+            map_values[name],
+            map_sd[name],
+        )
+        for name in ("bias", *problem.parameters)
+    }
+    return NoisePosterior(
+        parameters=summaries,
+        diagnostics=diagnostics,
+        draws=natural,
+        log_posterior=np.asarray(log_posterior),
+        pointwise_log_likelihood=np.asarray(pointwise),
+        map_theta=estimate.theta,
+        laplace_covariance=estimate.covariance,
+        problem=problem,
+        terms=tuple(terms),
+        seed=seed,
+    )
+
+
+def _map_summary(problem: NoiseProblem, estimate: Mode) -> tuple[dict, dict]:
+    """MAP values and their Laplace sds (delta method) in the channel's units, the bias
+    included (its conditional sd, widened by the ramp's uncertainty when R is fitted)."""
+    values = {name: float(v) for name, v in problem.natural(jnp.asarray(estimate.theta)).items()}
+    spread = {}
+    for i, name in enumerate(problem.parameters):
+        sd = math.sqrt(max(estimate.covariance[i, i], 0.0))
+        slope = {"R": float(problem.prior.ramp_scale), "F": 1.0 - values.get("F", 0.0) ** 2}
+        spread[name] = sd * slope.get(name, values[name])
+    mean, variance, per_ramp = (
+        float(value) for value in _bias_at(problem, jnp.asarray(estimate.theta))
+    )
+    if "R" in problem.parameters:
+        variance += per_ramp**2 * spread["R"] ** 2
+    values["bias"], spread["bias"] = mean, math.sqrt(variance)
+    return values, spread

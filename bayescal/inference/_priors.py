@@ -1,0 +1,83 @@
+"""Priors of the noise parameters.
+
+Weakly informative by default: each noise scale is log-normal with its median at the level the
+classical Allan curve allows for that term (:func:`allan_reference_scales`) and a standard
+deviation of ``PRIOR_LOG_SD`` in the logarithm (a factor 55); R is normal around zero with
+``RAMP_PRIOR_FACTOR`` times the drift that would explain the whole Allan deviation at the
+longest tau; the output filter's atanh F is standard normal; the bias is flat.
+
+From a sensor card (:mod:`bayescal.recording._sensor_cards`), each datasheet figure becomes a
+log-normal centred on it with a standard deviation of log 3 in the logarithm: datasheets quote
+typical units, and a unit three times better or worse than typical is not surprising. Terms
+the card says nothing of keep the weakly informative default.
+"""
+
+import math
+
+import numpy as np
+
+from .._errors import InputError
+from ..classical._allan import DeviationResult
+from ..models._noise_problem import PRIOR_LOG_SD, NoisePrior
+from ..models._terms import PARAMETER_OF_TERM
+from ..recording._sensor_cards import SensorCard
+
+RAMP_PRIOR_FACTOR = 10.0
+CARD_LOG_SD = math.log(3.0)
+
+
+def allan_reference_scales(allan: DeviationResult) -> dict[str, float]:
+    """The level of each term the classical Allan curve allows (its upper bound, DESIGN.md
+    table): the centres of the weakly informative priors."""
+    usable = np.isfinite(allan.deviation)
+    tau, sigma = allan.tau[usable], allan.deviation[usable]
+    return {
+        "Q": float(np.min(sigma * tau / math.sqrt(3.0))),
+        "N": float(np.min(sigma * np.sqrt(tau))),
+        "B": float(np.min(sigma) / math.sqrt(2 * math.log(2) / math.pi)),
+        "K": float(np.min(sigma * np.sqrt(3.0 / tau))),
+        "R": float(np.min(sigma * math.sqrt(2.0) / tau)),
+    }
+
+
+def default_prior(terms: tuple[str, ...], allan: DeviationResult) -> NoisePrior:
+    scales = allan_reference_scales(allan)
+    parameters = tuple(PARAMETER_OF_TERM[term] for term in terms)
+    location = [0.0 if p in ("R", "F") else math.log(scales[p]) for p in parameters]
+    scale = [1.0 if p in ("R", "F") else PRIOR_LOG_SD for p in parameters]
+    return NoisePrior(
+        np.array(location),
+        np.array(scale),
+        np.asarray(RAMP_PRIOR_FACTOR * scales["R"]),
+        parameters,
+        "weakly informative: log-normal noise scales, median at the Allan-curve "
+        f"bound of each term, sd {PRIOR_LOG_SD:g} in the log; normal ramp around 0; "
+        "atanh of the output filter coefficient standard normal",
+    )
+
+
+def card_prior(card: SensorCard, terms: tuple[str, ...], unit: str, allan) -> NoisePrior:
+    """The default prior with the card's figures in place of the terms it gives."""
+    base = default_prior(terms, allan)
+    try:
+        values = card.datasheet_values(unit)
+    except ValueError as error:
+        raise InputError(f"--sensor {card.name}: {error}", source=str(card.path)) from None
+    location, scale = np.array(base.location), np.array(base.scale)
+    used = []
+    for index, parameter in enumerate(base.parameters):
+        if parameter in values:
+            location[index] = math.log(values[parameter][0])
+            scale[index] = CARD_LOG_SD
+            used.append(parameter)
+    if not used:
+        raise InputError(
+            f"--sensor {card.name}: the card gives none of the fitted terms "
+            f"({', '.join(base.parameters)})"
+        )
+    description = (
+        f"sensor card {card.name} ({card.datasheet}): log-normal on "
+        f"{', '.join(used)} with median at the datasheet value and sd log 3; "
+        f"other terms: {base.description}"
+    )
+    return NoisePrior(location, scale, base.ramp_scale, base.parameters, description)

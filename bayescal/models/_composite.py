@@ -1,0 +1,418 @@
+"""The composite model discovery grows: the stationary noise terms, deterministic terms of
+the mean and sample effects (the catalogue, :mod:`.effects`) of one static channel.
+
+Layout. The noise coordinates sit in fixed slots — log N, log B, log K, log Q, log sigma of a
+Gauss-Markov term, the ramp R / scale, atanh of the output filter F — and the regression
+coefficients in MAX_REGRESSORS columns; a model switches slots and columns on or off with
+masks, so that every model of a recording shares one compiled likelihood.
+
+Likelihood. The Whittle likelihood of the increments (:mod:`._whittle`) of the data minus the
+deterministic terms, with the noise terms' exact expected periodogram; the coefficients enter
+as a quadratic form, profiled (for the MAP) or integrated out (for the posterior) exactly.
+The slow coefficients (all but the sinusoids') are then taken from block means by generalised
+least squares (:func:`level_coefficients`): the increments' likelihood discards the ends of
+the record with its taper, where a warm-up or a temperature step hold most of their
+information, and cannot see the level of the signal, which is what tells a Gauss-Markov term
+(bounded) from a random walk (not).
+"""
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from ._components import SPECTRAL_COMPONENTS, block_covariance_basis, component_weights
+from ._noise_model import NoiseModel
+from ._noise_problem import PRIOR_LOG_SD
+from ._whittle import regression_coefficients, whittle_log_likelihood
+from .effects._base import Effect, RegressionTerm, SlotTerm
+from .effects._catalogue import CATALOGUE, SEARCHED
+from .effects.bias_instability import BiasInstability
+from .effects.gauss_markov import GaussMarkov
+from .effects.outliers import Outliers
+from .effects.output_filter import OutputFilter
+from .effects.quantization import Quantization
+from .effects.rate_ramp import RateRamp
+from .effects.rate_random_walk import RateRandomWalk
+from .effects.saturation import Saturation
+from .effects.white import White
+
+NOISE_SLOTS = ("N", "B", "K", "Q", "G", "R", "F")
+"""The sampled noise coordinates: log N, log B, log K, log Q, log sigma of a Gauss-Markov
+term, the ramp R / scale, atanh of the output filter F."""
+SLOT_OF = {
+    White: 0,
+    BiasInstability: 1,
+    RateRandomWalk: 2,
+    Quantization: 3,
+    GaussMarkov: 4,
+    RateRamp: 5,
+    OutputFilter: 6,
+}
+"""The slot of each noise term."""
+MAX_REGRESSORS = sum(term.max_columns for term in SEARCHED if issubclass(term, RegressionTerm))
+LEVEL_BLOCKS = 128
+"""Block means for the coefficients of slow deterministic terms."""
+
+
+class ModelSpec(eqx.Module):
+    """Which effects a model holds, each with its nonlinear parameters fixed (a time
+    constant, a frequency, a degree): white noise and the baseline's terms, then whatever
+    discovery added, in the order it added them."""
+
+    effects: tuple = eqx.field(static=True, default=(White(),))
+
+    @classmethod
+    def from_names(cls, names) -> "ModelSpec":
+        """A model of the noise terms ``names`` (white noise always among them)."""
+        names = ("white", *(name for name in names if name != "white"))
+        return cls(tuple(CATALOGUE[name]() for name in names))
+
+    def has(self, name: str) -> bool:
+        return any(effect.name == name for effect in self.effects)
+
+    def has_instance(self, effect: Effect) -> bool:
+        return effect in self.effects
+
+    def count(self, name: str) -> int:
+        return sum(effect.name == name for effect in self.effects)
+
+    def with_effect(self, effect: Effect) -> "ModelSpec":
+        return ModelSpec((*self.effects, effect))
+
+    def index_of(self, effect: Effect) -> int:
+        """How many effects of its kind come before ``effect`` in this model."""
+        same = [other for other in self.effects if type(other) is type(effect)]
+        return same.index(effect)
+
+    @property
+    def noise(self) -> tuple[str, ...]:
+        """The noise terms, in the order they were added."""
+        return tuple(effect.name for effect in self.effects if isinstance(effect, SlotTerm))
+
+    @property
+    def gauss_markov_s(self) -> float:
+        """The Gauss-Markov term's time constant (0 without one)."""
+        found = [effect for effect in self.effects if isinstance(effect, GaussMarkov)]
+        return found[0].time_constant_s if found else 0.0
+
+    @property
+    def saturation(self) -> bool:
+        return any(isinstance(effect, Saturation) for effect in self.effects)
+
+    @property
+    def outliers(self) -> bool:
+        return any(isinstance(effect, Outliers) for effect in self.effects)
+
+    def ranked(self) -> list[Effect]:
+        """The effects beyond the noise terms, by rank (each kind in the order added)."""
+        others = [effect for effect in self.effects if not isinstance(effect, SlotTerm)]
+        return sorted(others, key=lambda effect: effect.rank)
+
+    def terms(self) -> list[str]:
+        """The model's terms as catalogue names, the bias first."""
+        return ["bias", *self.noise, *(effect.name for effect in self.ranked())]
+
+    def regression_terms(self) -> list[tuple[RegressionTerm, int]]:
+        """The deterministic terms by rank, each with how many of its kind precede it."""
+        seen: dict[type, int] = {}
+        terms = []
+        for effect in self.ranked():
+            if isinstance(effect, RegressionTerm):
+                terms.append((effect, seen.get(type(effect), 0)))
+                seen[type(effect)] = seen.get(type(effect), 0) + 1
+        return terms
+
+    def regression_terms_of(self, name: str) -> list[RegressionTerm]:
+        """The deterministic terms named ``name``, in the order they were added."""
+        return [term for term, _ in self.regression_terms() if term.name == name]
+
+    def regressor_names(self) -> list[str]:
+        return [
+            name for term, index in self.regression_terms() for name in term.column_names(index)
+        ]
+
+    def searched(self) -> int:
+        """Nonlinear parameters fixed by a search: time constants and frequencies."""
+        return sum(effect.searched for effect in self.effects)
+
+    def search_penalty(self, n_frequencies: int) -> float:
+        """log of the number of values each search chose among: with a uniform prior over
+        them, the marginal likelihood is at least the best one's divided by that number, so
+        the log Bayes factor is at least the best fit's minus this."""
+        return sum(effect.search_penalty(n_frequencies) for effect in self.effects)
+
+    def summary_key(self) -> tuple:
+        """What a model's spectral summary depends on: the data it is fitted to, its
+        deterministic terms and the Gauss-Markov time constant."""
+        return (
+            self.saturation,
+            self.outliers,
+            tuple(term for term, _ in self.regression_terms()),
+            self.gauss_markov_s or 1.0,
+        )
+
+
+def regressor_columns(spec: ModelSpec, data) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """(samples, MAX_REGRESSORS) columns of the deterministic terms (zero columns where
+    absent), the scale that turns each coefficient back into the channel's units, and each
+    coefficient's unit."""
+    columns, scales, units = [], [], []
+    for term, _ in spec.regression_terms():
+        term_columns, term_scales, term_units = term.columns(data, data.time_s)
+        columns += term_columns
+        scales += term_scales
+        units += term_units
+    matrix = np.zeros((data.values.size, MAX_REGRESSORS))
+    if columns:
+        matrix[:, : len(columns)] = np.stack(columns, axis=1)
+    return matrix, np.array(scales), units
+
+
+def slot_prior(spec: ModelSpec, scales: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Location and scale of the normal prior on each slot (log-normal noise scales centred
+    on the Allan curve's bounds, ``scales``), and the slots the model switches on."""
+    location = np.array(
+        [
+            math.log(scales["N"]),
+            math.log(scales["B"]),
+            math.log(scales["K"]),
+            math.log(scales["Q"]),
+            math.log(scales["G"]),
+            0.0,
+            0.0,
+        ]
+    )
+    scale = np.array([PRIOR_LOG_SD] * 5 + [1.0, 1.0])
+    mask = np.zeros(len(NOISE_SLOTS))
+    for effect in spec.effects:
+        if isinstance(effect, SlotTerm):
+            mask[SLOT_OF[type(effect)]] = 1.0
+    return location, scale, mask
+
+
+class Design(eqx.Module):
+    """The data of one model, ready for the compiled functions."""
+
+    summary: object
+    location: np.ndarray
+    scale: np.ndarray
+    mask: np.ndarray
+    regressor_mask: np.ndarray
+    ramp_scale: np.ndarray
+
+
+def slot_variances(theta, mask, ramp_scale):
+    on = mask.astype(theta.dtype)
+    value = lambda slot: on[slot] * jnp.exp(theta[..., slot])  # noqa: E731
+    filter_coefficient = on[6] * jnp.tanh(theta[..., 6])
+    weights = component_weights(value(0), value(1), value(2), value(3), filter_coefficient)
+    gauss_markov = value(4) ** 2
+    variances = jnp.concatenate((weights, gauss_markov[..., None]), axis=-1)
+    return variances, on[5] * theta[..., 5] * ramp_scale
+
+
+def profile(design: Design, theta):
+    """Log-likelihood at the best regression coefficients given the noise, the coefficients
+    and their precision."""
+    variances, ramp = slot_variances(theta, design.mask, design.ramp_scale)
+    # Absent regressors are zero columns: a unit ridge pins their coefficients at zero.
+    beta, precision = regression_coefficients(
+        design.summary, variances, ramp, ridge=1.0 - design.regressor_mask
+    )
+    pointwise = whittle_log_likelihood(design.summary, variances, ramp, beta)
+    return pointwise, beta, precision
+
+
+def log_prior(design: Design, theta):
+    return -0.5 * jnp.sum(((theta - design.location) / design.scale) ** 2)
+
+
+def marginal_log_posterior(design: Design, theta):
+    """Log posterior of the noise coordinates with the regression coefficients integrated
+    out under a flat prior (exact: the likelihood is Gaussian in them)."""
+    pointwise, _, precision = profile(design, theta)
+    active = design.regressor_mask
+    sign, log_det = jnp.linalg.slogdet(precision)
+    value = (
+        jnp.sum(pointwise)
+        + log_prior(design, theta)
+        + 0.5 * jnp.sum(active) * jnp.log(2 * jnp.pi)
+        - 0.5 * log_det
+    )
+    return jnp.where(jnp.isfinite(value) & (sign > 0), value, -jnp.inf)
+
+
+def profiled_log_posterior(design: Design, theta):
+    """Log posterior of the noise coordinates with the regression coefficients at their best
+    values given the noise: what the MAP maximises."""
+    return jnp.sum(profile(design, theta)[0]) + log_prior(design, theta)
+
+
+@eqx.filter_jit
+def batch_profile(design: Design, theta):
+    """Coefficients and their precision for each row of ``theta``."""
+    return jax.vmap(lambda t: profile(design, t)[1:])(theta)
+
+
+class ModelFit(eqx.Module):
+    """The MAP fit of one model to one recording."""
+
+    spec: ModelSpec
+    theta: np.ndarray
+    beta: np.ndarray
+    beta_covariance: np.ndarray
+    pointwise: np.ndarray
+    """Log-likelihood at the MAP, pointwise: the Whittle bins above the block means' band,
+    then the one-block-ahead predictive density of each block mean."""
+    log_likelihood: float
+    n_parameters: int
+    schwarz: float
+    """log-likelihood - (continuous parameters / 2) log(frequencies) - log(values searched):
+    differences of it approximate log Bayes factors."""
+    converged: bool
+    residual: np.ndarray
+    """The data minus the fitted deterministic terms (bias and noise left)."""
+    clean: np.ndarray
+    """The data the model was fitted to (clipped samples imputed and outliers replaced when
+    the model has those terms)."""
+    design: Design
+    hessian: np.ndarray
+
+    @property
+    def noise(self) -> dict:
+        """Noise parameters at the MAP in the channel's units (absent terms: 0)."""
+        mask, theta = np.asarray(self.design.mask), self.theta
+        values = {
+            slot: float(mask[i] * math.exp(theta[i])) for i, slot in enumerate(NOISE_SLOTS[:5])
+        }
+        values["R"] = float(mask[5] * theta[5] * self.design.ramp_scale)
+        values["F"] = float(mask[6] * math.tanh(theta[6]))
+        return values
+
+
+def slow_columns(spec: "ModelSpec") -> np.ndarray:
+    """Indices of the regressors estimated from block means: those of the slow terms (all
+    but the sinusoids)."""
+    slow = [term.slow for term, index in spec.regression_terms() for _ in term.column_names(index)]
+    return np.flatnonzero(np.array(slow, dtype=bool)).astype(int)
+
+
+def padded(summary):
+    """The summary with its regression moments padded by zero columns to MAX_REGRESSORS, so
+    that every model of a recording shares one compiled likelihood."""
+    extra = MAX_REGRESSORS - summary.cross.shape[1]
+    return eqx.tree_at(
+        lambda s: (s.cross, s.gram, s.mean_regressor),
+        summary,
+        (
+            np.pad(summary.cross, ((0, 0), (0, extra), (0, 0))),
+            np.pad(summary.gram, ((0, 0), (0, extra), (0, extra), (0, 0))),
+            np.pad(summary.mean_regressor, ((0, 0), (0, extra))),
+        ),
+    )
+
+
+def level_design(values, regressors, rate_hz: float):
+    """Block means of the data and of the regressors, and the blocks' covariance bases."""
+    edges = np.linspace(0, values.size, LEVEL_BLOCKS + 1).round().astype(np.int64)
+    start, stop = edges[:-1], edges[1:]
+    means = block_means(values, start, stop)
+    columns = np.array([block_means(column, start, stop) for column in regressors.T]).T.reshape(
+        LEVEL_BLOCKS, regressors.shape[1]
+    )
+    return means, columns, start, stop
+
+
+def level_coefficients(fit_like, values, regressors, rate_hz, theta):
+    """GLS coefficients of ``regressors`` from the block means of the data under the noise at
+    ``theta`` (one set of coordinates, or a batch), the bias taken out and the ramp removed;
+    their covariance; and the one-block-ahead log predictive density of each block mean.
+
+    The increments' likelihood discards the ends of the record with its taper, where a
+    warm-up or a temperature step hold most of their information, and it cannot see the
+    level of the signal, which is what tells a Gauss-Markov term (bounded) from a random walk
+    (not); the block means keep both. With the coefficients at their GLS values the
+    Cholesky-whitened residuals are the standardised one-step-ahead prediction errors, so the
+    exact Gaussian log-likelihood of the block means splits into one predictive density per
+    block."""
+    means, columns, start, stop = level_design(values, regressors, rate_hz)
+    time = (start + stop) / 2 / rate_hz
+    theta = np.atleast_2d(theta)
+    variances, ramp = slot_variances(jnp.asarray(theta), fit_like.mask, fit_like.ramp_scale)
+    variances, ramp = np.asarray(variances), np.asarray(ramp)
+    basis = block_covariance_basis(start, stop, rate_hz)
+    covariance = np.einsum("dt,tij->dij", variances[:, : len(SPECTRAL_COMPONENTS)], basis)
+    if fit_like.gauss_markov_s > 0:
+        shape = GaussMarkov(fit_like.gauss_markov_s).block_covariance(start, stop, rate_hz)
+        covariance = covariance + variances[:, -1, None, None] * shape
+    design = np.concatenate((np.ones((columns.shape[0], 1)), columns), axis=1)
+    factor = np.linalg.cholesky(covariance)
+    white_design = np.linalg.solve(factor, np.broadcast_to(design, (theta.shape[0], *design.shape)))
+    target = means[None, :] - ramp[:, None] * time[None, :]
+    white_target = np.linalg.solve(factor, target[..., None])[..., 0]
+    normal = np.einsum("dip,diq->dpq", white_design, white_design)
+    right = np.einsum("dip,di->dp", white_design, white_target)
+    coefficient_covariance = np.linalg.inv(normal)
+    coefficients = np.einsum("dpq,dq->dp", coefficient_covariance, right)
+    errors = white_target - np.einsum("dip,dp->di", white_design, coefficients)
+    log_scale = np.log(np.diagonal(factor, axis1=-2, axis2=-1))
+    predictive = -0.5 * (errors**2 + math.log(2 * math.pi)) - log_scale
+    return coefficients[:, 1:], coefficient_covariance[:, 1:, 1:], predictive
+
+
+def above_level_band(summary, duration_s: float) -> np.ndarray:
+    """The Whittle bins above the band the block means already cover (up to their Nyquist
+    frequency), so that no frequency is counted twice in a model's likelihood."""
+    return summary.frequency_hz > LEVEL_BLOCKS / (2 * duration_s)
+
+
+class LevelNoise(eqx.Module):
+    mask: np.ndarray
+    ramp_scale: np.ndarray
+    gauss_markov_s: float = eqx.field(static=True)
+
+
+def model_allan_variance(fit: ModelFit, tau, rate_hz: float):
+    noise = fit.noise
+    model = NoiseModel(
+        rate_hz, N=noise["N"], B=noise["B"], K=noise["K"], Q=noise["Q"], R=noise["R"], F=noise["F"]
+    )
+    variance = np.asarray(model.allan_variance(tau))
+    if noise["G"] > 0:
+        variance = variance + GaussMarkov(fit.spec.gauss_markov_s).allan_variance(tau, noise["G"])
+    return variance
+
+
+def bin_ratios(fit: ModelFit) -> tuple[np.ndarray, np.ndarray]:
+    """sum I / S in each frequency bin at the MAP, and the model's expected periodogram."""
+    summary = fit.design.summary
+    variances, _ = slot_variances(jnp.asarray(fit.theta), fit.design.mask, fit.design.ramp_scale)
+    s0 = np.einsum("t,tb->b", np.asarray(variances), summary.basis[:, 0, :])
+    beta = np.zeros(MAX_REGRESSORS)
+    beta[: fit.beta.size] = fit.beta
+    moment0 = (
+        summary.moment0
+        - 2 * np.einsum("p,pb->b", beta, summary.cross[0])
+        + np.einsum("p,q,pqb->b", beta, beta, summary.gram[0])
+    )
+    return moment0 / s0, s0
+
+
+def block_covariance(fit: ModelFit, start, stop, rate_hz):
+    variances, _ = slot_variances(jnp.asarray(fit.theta), fit.design.mask, fit.design.ramp_scale)
+    variances = np.asarray(variances)
+    basis = block_covariance_basis(start, stop, rate_hz)
+    covariance = np.einsum("t,tij->ij", variances[: len(SPECTRAL_COMPONENTS)], basis)
+    if variances[-1] > 0:
+        covariance += variances[-1] * GaussMarkov(fit.spec.gauss_markov_s).block_covariance(
+            start, stop, rate_hz
+        )
+    return covariance
+
+
+def block_means(values, start, stop):
+    return np.array([np.nanmean(values[a:b]) for a, b in zip(start, stop, strict=True)])

@@ -1,0 +1,78 @@
+"""The bias: the level of a record, given its noise.
+
+The increments (:mod:`bayescal.models._whittle`) carry no information on the level; the bias
+(turn-on bias, the expected reading at the start of the record) comes from the data's level
+given the noise parameters. The record is cut into blocks — single samples at its start,
+growing geometrically, plus an even grid — and the block means z_i = bias + R t_i + e_i have
+an exact Gaussian covariance, a sum over terms of parameter^2 times a fixed matrix:
+
+each term gives its part in closed form (``block_covariance`` of the terms in
+:mod:`bayescal.models.effects`: white noise on the diagonal, the output filter's neighbouring
+pairs, the telescoped quantization error, the Brownian rate random walk, flicker's structure
+function).
+
+Given the noise parameters and R, the bias is then Gaussian (generalised least squares with
+a flat prior), which :func:`bias_given_noise` returns for any number of posterior draws.
+"""
+
+import itertools
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jax.scipy.linalg import cho_solve
+
+from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from ._components import block_covariance_basis
+
+GEOMETRIC_BLOCKS = 96
+EVEN_BLOCKS = 32
+
+
+class LevelSummary(eqx.Module):
+    block_mean: np.ndarray
+    block_time_s: np.ndarray
+    """Mean time (s, sample centres) of each block, for the ramp."""
+    basis: np.ndarray
+    """(terms, blocks, blocks): covariance of the block means per unit parameter^2."""
+
+
+def _block_edges(values: np.ndarray) -> list[tuple[int, int]]:
+    """Blocks [start, stop) that never contain a missing sample."""
+    n = values.size
+    cuts = set(np.unique(np.round(np.geomspace(1, n, GEOMETRIC_BLOCKS)).astype(int)).tolist())
+    cuts |= set(np.linspace(0, n, EVEN_BLOCKS + 1).astype(int).tolist())
+    present = ~np.isnan(values)
+    runs = np.flatnonzero(np.diff(np.concatenate(([0], present.astype(np.int8), [0]))))
+    blocks = []
+    for start, stop in zip(runs[::2], runs[1::2], strict=True):
+        inner = sorted(c for c in cuts if start < c < stop)
+        edges = [start, *inner, stop]
+        blocks += list(itertools.pairwise(edges))
+    return blocks
+
+
+def level_summary(values, rate_hz: float) -> LevelSummary:
+    """Block means of a rate series (NaN marks missing samples) and their covariance bases."""
+    values = np.asarray(values, dtype=float)
+    blocks = np.array(_block_edges(values), dtype=np.int64)
+    start, stop = blocks[:, 0], blocks[:, 1]
+    return LevelSummary(
+        block_mean=np.array([values[a:b].mean() for a, b in blocks]),
+        block_time_s=(start + stop) / 2.0 / rate_hz,
+        basis=block_covariance_basis(start, stop, rate_hz),
+    )
+
+
+def bias_given_noise(summary: LevelSummary, variances, ramp=0.0):
+    """Mean and variance of the bias given the noise (the weights of the spectral components,
+    :func:`~bayescal.models._components.component_weights`) and the ramp R, under a flat prior.
+    Works on a batch of draws (leading axes of ``variances``)."""
+    variances = jnp.asarray(variances)
+    covariance = jnp.einsum("...t,tij->...ij", variances, summary.basis)
+    target = summary.block_mean - jnp.asarray(ramp)[..., None] * summary.block_time_s
+    factor = jnp.linalg.cholesky(covariance)
+    ones = jnp.broadcast_to(jnp.ones(summary.block_mean.shape), target.shape)
+    weights = cho_solve((factor, True), ones[..., None])[..., 0]
+    precision = jnp.sum(weights, axis=-1)
+    return jnp.sum(weights * target, axis=-1) / precision, 1.0 / precision

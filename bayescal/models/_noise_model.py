@@ -1,0 +1,196 @@
+"""The stationary noise of one static IMU channel, as one model object.
+
+Terms (IEEE Std 952 / 1554, ../shared/DESIGN.md), for a rate signal in unit U sampled at fs,
+each one class in :mod:`bayescal.models.effects`:
+
+==================  =========  =============  ===========================================
+term                parameter  unit           two-sided PSD of the continuous rate S(f)
+==================  =========  =============  ===========================================
+white noise         N          U/sqrt(Hz)     N^2
+bias instability    B          U              B^2 / (2 pi |f|)
+rate random walk    K          U*sqrt(Hz)     K^2 / (2 pi f)^2
+quantization        Q          U*s            white phase (angle) noise of variance Q^2
+rate ramp           R          U/s            deterministic R t
+output filter       F          1              the white noise leaves the sensor through
+                                              (1 + F z^-1) / (1 + F): unit gain at low
+                                              frequency (N stays the noise density the
+                                              Allan curve reads), less power near Nyquist
+==================  =========  =============  ===========================================
+
+Sampling: each sample is the average rate over its sample period (the integrated angle or
+velocity increment divided by the period, as IMUs deliver it). With this sampling the Allan
+variances of the table in DESIGN.md hold exactly at every tau = m / fs, and the spectra of
+the samples are the aliased sums fs sum_k S((nu + k) fs) sinc^2(pi (nu + k)), which have
+closed forms (nu in cycles per sample). The record starts at t = 0 with the random walk and
+the flicker at zero, so ``bias`` is the expected reading at the start: the turn-on bias.
+"""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.scipy.stats import norm
+
+from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from ._components import SPECTRAL_TERMS, component_weights
+from ._level import bias_given_noise, level_summary
+from ._whittle import spectral_summary, whittle_log_likelihood
+from .effects.bias_instability import BiasInstability
+from .effects.gauss_markov import GaussMarkov
+from .effects.output_filter import OutputFilter
+from .effects.quantization import Quantization
+from .effects.rate_ramp import RateRamp
+from .effects.rate_random_walk import RateRandomWalk
+from .effects.white import White
+
+_TERM_OF_PARAMETER = {term.parameter: term for term in (*SPECTRAL_TERMS, RateRamp, GaussMarkov)}
+
+
+def parameter_unit(parameter: str, channel_unit: str) -> str:
+    """Unit of a noise parameter (Q, N, B, K, R, F, sigma_gm, or the bias) for a channel in
+    ``channel_unit`` (IEEE Std 952; ASCII, e.g. ``deg/s/sqrt(Hz)``).
+
+    Raises
+    ------
+    ValueError
+        An unknown parameter.
+    """
+    if parameter == "bias":
+        return channel_unit
+    if parameter not in _TERM_OF_PARAMETER:
+        raise ValueError(
+            f"unknown noise parameter {parameter!r}; expected bias or one of "
+            f"{', '.join(_TERM_OF_PARAMETER)}"
+        )
+    return _TERM_OF_PARAMETER[parameter].unit(channel_unit)
+
+
+def _present(parameter) -> bool:
+    """False only for a term switched off by a literal zero (traced values always count)."""
+    return not (isinstance(parameter, (int, float)) and parameter == 0)
+
+
+class NoiseModel(eqx.Module):
+    """Bias plus the noise terms of a static channel; one object whose simulator, Allan
+    variance, spectrum and likelihood share its parameters (in the channel's unit U).
+
+    Parameters
+    ----------
+    rate_hz : float
+        Sample rate, Hz.
+    bias : float
+        Turn-on bias: the expected reading at the first sample, U.
+    N : float
+        White noise density (angle / velocity random walk), U/√Hz.
+    B : float
+        Bias instability (flicker), U.
+    K : float
+        Rate random walk, U·√Hz.
+    Q : float
+        Quantization (white angle noise), U·s.
+    R : float
+        Rate ramp, U/s.
+    F : float
+        Output filter coefficient in (-1, 1), dimensionless.
+
+    A parameter of zero leaves its term out. Parameters may be JAX arrays (a batch of draws
+    broadcasts through :meth:`allan_variance` and :meth:`psd`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bayescal as bc
+    >>> model = bc.NoiseModel(rate_hz=100.0, bias=0.4, N=0.0035, K=4e-5)
+    >>> y = model.simulate(360_000, seed=0)
+    >>> y.shape
+    (360000,)
+    >>> float(np.sqrt(model.allan_variance(1.0)))  # ADEV at 1 s, deg/s
+    0.0035...
+    """
+
+    rate_hz: float = eqx.field(static=True)
+    bias: float | jax.Array = 0.0
+    N: float | jax.Array = 0.0
+    B: float | jax.Array = 0.0
+    K: float | jax.Array = 0.0
+    Q: float | jax.Array = 0.0
+    R: float | jax.Array = 0.0
+    F: float | jax.Array = 0.0
+
+    def __check_init__(self):
+        if not self.rate_hz > 0:
+            raise ValueError(f"rate_hz={self.rate_hz!r} must be a positive sample rate")
+        if isinstance(self.F, (int, float)) and not -1 < self.F < 1:
+            raise ValueError(f"F={self.F!r}: the output filter coefficient lies in (-1, 1)")
+
+    def allan_variance(self, tau):
+        """Allan variance at averaging times ``tau`` (s), U^2: the sum of each term's (the
+        DESIGN.md table, exact for period-averaged samples)."""
+        tau = jnp.asarray(tau, dtype=float)
+        return (
+            Quantization.allan_variance(tau, self.Q)
+            + White.allan_variance(tau, self.N)
+            + OutputFilter.allan_variance(tau, self.N, self.F, self.rate_hz)
+            + BiasInstability.allan_variance(tau, self.B)
+            + RateRandomWalk.allan_variance(tau, self.K)
+            + RateRamp.allan_variance(tau, self.R)
+        )
+
+    def psd(self, f):
+        """Two-sided power spectral density of the samples at ``f`` (Hz, 0 < f <= fs/2),
+        U^2/Hz: white noise reads N^2. The increments' spectrum divided by the differencing
+        filter's gain |1 - e^{-2 pi i f / fs}|^2 = 4 sin^2(pi f / fs), per Hz; the rate random
+        walk and flicker diverge at zero frequency, the ramp (deterministic) is left out."""
+        nu = jnp.asarray(f, dtype=float) / self.rate_hz
+        weights = component_weights(self.N, self.B, self.K, self.Q, self.F)
+        shapes = jnp.stack([term.spectrum(nu, self.rate_hz) for term in SPECTRAL_TERMS], -1)
+        increments = jnp.sum(weights * shapes, axis=-1)
+        return increments / (4 * jnp.sin(jnp.pi * nu) ** 2 * self.rate_hz)
+
+    def sample(self, key: jax.Array, n: int) -> jax.Array:
+        """``n`` samples of the channel as a JAX array (traceable: ``jax.vmap`` over keys
+        gives many records); :meth:`simulate` is the NumPy form."""
+        # The order of the draws is fixed: the same key gives the same record in every
+        # release.
+        white_key, walk_key, bridge_key, flicker_key, quant_key = jax.random.split(key, 5)
+        y = self.bias + White.sample(white_key, n, self.rate_hz, self.N, self.F)
+        if _present(self.K):
+            y = y + RateRandomWalk.sample(walk_key, bridge_key, n, self.rate_hz, self.K)
+        if _present(self.B):
+            y = y + self.B * BiasInstability.sample(flicker_key, n)
+        if _present(self.Q):
+            y = y + Quantization.sample(quant_key, n, self.rate_hz, self.Q)
+        if _present(self.R):
+            y = y + RateRamp.sample(n, self.rate_hz, self.R)
+        return y
+
+    def simulate(self, n: int, seed: int | jax.Array = 0) -> np.ndarray:
+        """``n`` samples of the channel, U.
+
+        Parameters
+        ----------
+        n : int
+            Number of samples.
+        seed : int or JAX PRNG key
+            The same seed gives the same samples.
+
+        Returns
+        -------
+        numpy.ndarray
+            The samples, each the average rate over its period, starting at t = 0.
+        """
+        key = jax.random.PRNGKey(seed) if isinstance(seed, (int, np.integer)) else seed
+        return np.asarray(self.sample(key, n))
+
+    def log_likelihood(self, y) -> float:
+        """Log-likelihood of a record ``y`` (U; NaN marks missing samples): the debiased,
+        binned Whittle likelihood of its increments (the likelihood every noise fit of
+        bayescal uses, :mod:`bayescal.models._whittle`), plus the exact Gaussian log density
+        of its level — the generalised-least-squares estimate of the turn-on bias from block
+        means given the noise (:mod:`bayescal.models._level`) — at :attr:`bias`."""
+        values = np.asarray(y, dtype=float)
+        weights = component_weights(self.N, self.B, self.K, self.Q, self.F)
+        increments = whittle_log_likelihood(spectral_summary(values, self.rate_hz), weights, self.R)
+        mean, variance = bias_given_noise(level_summary(values, self.rate_hz), weights, self.R)
+        level = norm.logpdf(mean, loc=self.bias, scale=jnp.sqrt(variance))
+        return float(jnp.sum(increments) + level)

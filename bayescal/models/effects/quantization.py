@@ -1,0 +1,79 @@
+"""Quantization noise: white angle (or velocity) noise, IEEE Std 952's Q."""
+
+import math
+from typing import ClassVar
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ... import _x64  # noqa: F401  (float64 before any JAX array)
+from ...recording._levels import discrete_step
+from ...recording._units import integral_unit
+from ._base import NoiseTerm, moving_average
+
+
+class Quantization(NoiseTerm):
+    """White noise of the integrated signal (the angle or velocity increment) of variance Q^2
+    per sample, Q in unit·s: each rate sample carries the difference of two such errors over
+    its period, so its increments are a moving average of order 2 and the Allan variance
+    falls as 3 Q^2 / tau^2."""
+
+    name: ClassVar[str] = "quantization"
+    explanation: ClassVar[str] = (
+        "The output is rounded to the converter's resolution (LSB): the samples sit on "
+        "discrete levels and the Allan deviation falls as 1/tau at short tau."
+    )
+    located_by: ClassVar[str] = "discrete_levels"
+    parameter: ClassVar[str] = "Q"
+    long_memory: ClassVar[bool] = False
+
+    @staticmethod
+    def unit(channel_unit: str) -> str:
+        return integral_unit(channel_unit)
+
+    @classmethod
+    def propose(cls, search, current):
+        """Only for samples on a grid of levels."""
+        if discrete_step(search.data.values) > 0:
+            return super().propose(search, current)
+        return None
+
+    @staticmethod
+    def weight(Q):
+        """Weight of the component: Q^2."""
+        return Q**2
+
+    @staticmethod
+    def spectrum(nu, rate_hz):
+        sin2 = jnp.sin(jnp.pi * nu) ** 2
+        return 16 * sin2 * sin2 * rate_hz**2
+
+    @staticmethod
+    def autocovariance(lags, rate_hz):
+        return rate_hz**2 * moving_average(lags, (6.0, -4.0, 1.0))
+
+    @staticmethod
+    def block_covariance(start, stop, rate_hz):
+        """The block mean of (e_{k+1} - e_k) / period over [a, b) is (e_b - e_a) / (m period):
+        Q^2 fs^2 / (m_i m_j) at each block end two blocks share."""
+        size = (stop - start).astype(float)
+        shared = (
+            np.equal.outer(stop, stop).astype(float)
+            - np.equal.outer(stop, start)
+            - np.equal.outer(start, stop)
+            + np.equal.outer(start, start)
+        )
+        return rate_hz**2 * shared / np.outer(size, size)
+
+    @staticmethod
+    def allan_variance(tau, Q):
+        """3 Q^2 / tau^2 (IEEE Std 952, eq. C.2 squared)."""
+        return 3 * Q**2 / tau**2
+
+    @staticmethod
+    def sample(key, n, rate_hz, Q):
+        """Quantization of the integrated signal: a uniform error of variance Q^2 per sample,
+        differenced over each period."""
+        phase_error = jax.random.uniform(key, (n + 1,), minval=-0.5, maxval=0.5)
+        return Q * math.sqrt(12.0) * jnp.diff(phase_error) / (1.0 / rate_hz)

@@ -1,0 +1,75 @@
+"""Sinusoid: a periodic disturbance at a fixed frequency (vibration, a rotor, mains)."""
+
+import math
+from typing import ClassVar
+
+import numpy as np
+
+from ._base import RegressionTerm
+
+MAX_COUNT = 2
+"""The most sinusoids discovery adds to one model."""
+
+
+class Sinusoid(RegressionTerm):
+    """a sin(2 pi f t) + b cos(2 pi f t), f (``frequency_hz``) located among the Fourier
+    frequencies and refined between them; the amplitude sqrt(a^2 + b^2) is in the channel's
+    unit. A line's coefficients come from the increments' periodogram, not the block
+    means."""
+
+    name: ClassVar[str] = "sinusoid"
+    explanation: ClassVar[str] = (
+        "A periodic disturbance (vibration, a rotor, mains pickup) adds a line to the "
+        "spectrum at a fixed frequency."
+    )
+    located_by: ClassVar[str] = "spectral_line"
+    rank: ClassVar[int] = 3
+    max_columns: ClassVar[int] = 2 * MAX_COUNT
+    slow: ClassVar[bool] = False
+    frequency_hz: float
+
+    @property
+    def searched(self) -> int:
+        return 1
+
+    def search_penalty(self, n_frequencies: int) -> float:
+        """Located among the Fourier frequencies: log of their number."""
+        return math.log(n_frequencies)
+
+    def column_names(self, index):
+        return [f"sinusoid{index}_sin", f"sinusoid{index}_cos"]
+
+    def columns(self, data, time_s):
+        phase = 2 * np.pi * self.frequency_hz * time_s
+        return [np.sin(phase), np.cos(phase)], [1.0, 1.0], [data.unit, data.unit]
+
+    def derive(self, draws: dict, units: dict, index: int) -> None:
+        """The amplitude sqrt(a^2 + b^2) in place of the sine and cosine coefficients."""
+        sine, cosine = (draws.pop(f"sinusoid{index}_{part}") for part in ("sin", "cos"))
+        unit = units.pop(f"sinusoid{index}_sin")
+        units.pop(f"sinusoid{index}_cos")
+        draws[f"sinusoid{index}_amplitude"] = np.hypot(sine, cosine)
+        units[f"sinusoid{index}_amplitude"] = unit
+
+    @classmethod
+    def propose(cls, search, current):
+        if current.spec.count(cls.name) >= MAX_COUNT:
+            return None
+        frequency = search.line_frequency(current)
+        return search.fit(current.spec.with_effect(cls(frequency))), {"frequency_hz": frequency}
+
+    def describe(self, finding, posterior, search) -> dict:
+        index = finding.fit.spec.index_of(self)
+        amplitude = search.summarize(
+            posterior.draws[f"sinusoid{index}_amplitude"], search.data.unit
+        )
+        return {
+            "amplitude": amplitude,
+            "frequency": search.frequency_interval(finding.fit, index, amplitude["mean"]),
+        }
+
+    def location(self, finding, checks: dict) -> dict:
+        return {"check": self.located_by, "frequency_hz": self.frequency_hz}
+
+    def simulate(self, time_s: np.ndarray, amplitude: float, phase: float) -> np.ndarray:
+        return amplitude * np.sin(2 * np.pi * self.frequency_hz * time_s + phase)

@@ -1,0 +1,104 @@
+"""The values a record sits on: its distinct levels, its resolution (the converter's LSB or the
+printed precision), and whether its extreme values pile up (a rail).
+
+A clipped channel piles samples up on one value — the largest (or smallest) it can output —
+where an unclipped one would have spread them over the tail beyond it. :func:`rail_check` asks
+whether the record's extremes hold more samples than a normal spread puts in their resolution
+bin; the saturation effect (:mod:`bayescal.models.effects.saturation`) decides whether they are
+clipped, and models it. :func:`discrete_step` finds the grid of levels a quantized output sits
+on.
+"""
+
+import numpy as np
+
+SIDES = ("upper", "lower")
+MIN_LEVELS = 5
+"""Fewer distinct values than this: the converter's step hides any rail (and the spread)."""
+RAIL_SIGMAS = 6.0
+"""A pile farther than this many robust standard deviations from the median clips nothing of
+the noise: it is a disturbance beyond the range (the loader refuses a run of it) or repeated
+glitches (``outliers``), not saturation."""
+END = {"upper": -1, "lower": 0}
+"""Index of each side's extreme among the sorted levels."""
+
+
+def log_bin(low, width):
+    """log(Phi(low + width) - Phi(low)) for standard scores, accurate in either tail and for
+    bins far narrower than the spread (the width passed as such: a difference of two scores
+    far from zero would lose it)."""
+    from scipy import special, stats
+
+    high = low + width
+    upper_tail = low > 0
+    a = np.where(upper_tail, -high, low)
+    b = np.where(upper_tail, -low, high)
+    log_b = special.log_ndtr(b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        exact = log_b + np.log1p(-np.exp(special.log_ndtr(a) - log_b))
+    narrow = stats.norm.logpdf(low + 0.5 * width) + np.log(width)
+    return np.where(width < 1e-3, narrow, exact)
+
+
+class Levels:
+    """The distinct values of a record, how many samples sit on each, its resolution (the
+    least step between values: the converter's LSB or the printed precision) and the extremes
+    that at least two samples share within the noise."""
+
+    def __init__(self, values: np.ndarray):
+        finite = values[np.isfinite(values)]
+        self.levels, self.inverse, self.counts = np.unique(
+            finite, return_inverse=True, return_counts=True
+        )
+        self.n = finite.size
+        self.rails = {}
+        if self.levels.size < MIN_LEVELS:
+            return
+        self.step = float(np.min(np.diff(self.levels)))
+        median = np.median(finite)
+        spread = 1.4826 * np.median(np.abs(finite - median))
+        for side in SIDES:
+            rail, count = self.levels[END[side]], self.counts[END[side]]
+            if count >= 2 and abs(rail - median) <= RAIL_SIGMAS * spread:
+                self.rails[side] = (float(rail), int(count))
+
+
+def discrete_step(values: np.ndarray) -> float:
+    """The spacing of the levels the samples sit on, or 0 when they are not on a grid."""
+    finite = values[np.isfinite(values)]
+    levels = np.unique(finite)
+    if levels.size > finite.size / 4 or levels.size < 3:
+        return 0.0
+    steps = np.diff(levels)
+    step = float(np.min(steps))
+    on_grid = np.abs(steps / step - np.round(steps / step)) < 1e-3
+    return step if np.mean(on_grid) > 0.99 else 0.0
+
+
+def rail_check(values: np.ndarray, rate_hz: float, unit: str) -> dict:
+    """Samples stuck on an extreme value within the noise, against the normal with the
+    record's mean and sd: the chance that as many others share the extreme's resolution bin,
+    for either side (Bonferroni). With fine resolution, two samples on the extreme are
+    already improbable; on a coarse converter step the top level holds a few anyway."""
+    from scipy import stats
+
+    record = Levels(values)
+    worst = {"name": "rail", "statistic": 1, "p_value": 1.0, "location": {}}
+    finite = values[np.isfinite(values)]
+    mean, sd = float(np.mean(finite)), float(np.std(finite))
+    for side, (rail, count) in record.rails.items():
+        low = (rail - 0.5 * record.step - mean) / sd
+        in_bin = float(np.exp(log_bin(np.array(low), record.step / sd)))
+        p_value = min(1.0, len(SIDES) * stats.binom.sf(count - 2, record.n - 1, in_bin))
+        if p_value <= worst["p_value"]:
+            where = np.flatnonzero(values == rail)
+            worst["statistic"], worst["p_value"] = count, float(p_value)
+            worst["location"] = {
+                "side": side,
+                "rail": rail,
+                "unit": unit,
+                "samples": count,
+                "fraction": count / record.n,
+                "first_s": float(where[0] / rate_hz),
+                "last_s": float(where[-1] / rate_hz),
+            }
+    return worst

@@ -1,0 +1,451 @@
+"""``bayescal noise --export FORMAT PATH``: the noise of a channel in the files IMU tools read.
+
+Formats
+-------
+``kalibr``
+    Kalibr's ``imu.yaml`` (keys ``accelerometer_noise_density``, ``accelerometer_random_walk``,
+    ``gyroscope_noise_density``, ``gyroscope_random_walk``, ``rostopic``, ``update_rate``).
+    Kalibr's IMU noise model (Kalibr wiki, "IMU Noise Model",
+    https://github.com/ethz-asl/kalibr/wiki/IMU-Noise-Model) is written in continuous time:
+    ``*_noise_density`` is the white-noise density σ, the IEEE Std 952 angle/velocity random
+    walk N in unit/√Hz; ``*_random_walk`` is σ_b, the density of the white noise whose
+    integral is the bias, which is the rate random walk K in unit·√Hz (= unit/s/√Hz) — not
+    the bias instability B, a flicker floor Kalibr does not model. Kalibr discretises them
+    itself with ``update_rate`` (σ_d = σ·√rate, σ_bd = σ_b/√rate), so the file carries the
+    continuous-time values; B goes into a comment only. Units are SI: rad/s and m/s².
+``matlab``
+    A MATLAB script that builds ``gyroparams`` / ``accelparams`` objects for ``imuSensor``
+    (MATLAB Navigation / Sensor Fusion and Tracking Toolbox, "gyroparams" and "accelparams"
+    reference pages): ``NoiseDensity`` = N in (rad/s)/√Hz or (m/s²)/√Hz, ``BiasInstability``
+    = B in rad/s or m/s², ``RandomWalk`` = K in (rad/s)·√Hz or (m/s²)·√Hz — the mapping of
+    MathWorks' example "Inertial Sensor Noise Analysis Using Allan Variance" — and
+    ``TemperatureBias`` in (unit)/°C when a caller knows it (``bayescal noise`` does not, so
+    the script says so instead of leaving MATLAB's silent default of 0).
+
+Values are the Bayesian posterior means when the posterior was computed and passed its health
+checks, else the classical IEEE 952 readings of the Allan deviation (an upper bound where the
+curve has no stretch of the term's slope); the file says which, per value.
+
+One channel, one sensor
+-----------------------
+``bayescal noise`` analyses one channel, and Kalibr and MATLAB want one value per sensor (all
+three axes alike). So an export fills the entries of the channel's sensor — the gyroscope for
+an angular rate, the accelerometer for an acceleration, from the channel's unit — and keeps
+the other sensor's entries of the file already at PATH, if there is one that bayescal (or, for
+Kalibr, anyone) wrote. Two runs complete a file::
+
+    bayescal noise imu.bag --channel gyro_x --export kalibr imu.yaml
+    bayescal noise imu.bag --channel acc_x --export kalibr imu.yaml
+
+Until both have run, the missing sensor's entries are absent (with a comment that says how to
+add them), so Kalibr or MATLAB stops rather than calibrating with invented numbers. Pick the
+noisiest axis of each sensor for the export: the model applies its value to all three axes.
+"""
+
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from importlib.metadata import version
+from pathlib import Path
+
+from .._errors import InputError
+from .._output import check_writable, write_atomic
+from ..recording._units import parse_unit
+
+FORMATS = ("kalibr", "matlab")
+SENSORS = ("accelerometer", "gyroscope")
+_SENSOR_OF_QUANTITY = {"angular_rate": "gyroscope", "acceleration": "accelerometer"}
+_SI = {"gyroscope": "rad/s", "accelerometer": "m/s^2"}
+# Kalibr's units, as its wiki writes them.
+_KALIBR_UNITS = {
+    ("gyroscope", "N"): "rad/s/sqrt(Hz)",
+    ("gyroscope", "K"): "rad/s^2/sqrt(Hz)",
+    ("gyroscope", "B"): "rad/s",
+    ("accelerometer", "N"): "m/s^2/sqrt(Hz)",
+    ("accelerometer", "K"): "m/s^3/sqrt(Hz)",
+    ("accelerometer", "B"): "m/s^2",
+}
+_KALIBR_KEYS = {"N": "noise_density", "K": "random_walk"}
+_KALIBR_TOP = ("rostopic", "update_rate", "bayescal")
+_PLACEHOLDER_TOPIC = "/imu0"
+_MATLAB_VARIABLE = {"gyroscope": "gyro", "accelerometer": "accel"}
+_MATLAB_CLASS = {"gyroscope": "gyroparams", "accelerometer": "accelparams"}
+_MATLAB_PROPERTY = {"N": "NoiseDensity", "B": "BiasInstability", "K": "RandomWalk"}
+_MATLAB_UNITS = {
+    ("gyroscope", "N"): "(rad/s)/sqrt(Hz)",
+    ("gyroscope", "B"): "rad/s",
+    ("gyroscope", "K"): "(rad/s)*sqrt(Hz)",
+    ("gyroscope", "T"): "(rad/s)/degC",
+    ("accelerometer", "N"): "(m/s^2)/sqrt(Hz)",
+    ("accelerometer", "B"): "m/s^2",
+    ("accelerometer", "K"): "(m/s^2)*sqrt(Hz)",
+    ("accelerometer", "T"): "(m/s^2)/degC",
+}
+_MATLAB_MARK = "written by bayescal"
+_NAMES = {"N": "white noise N", "K": "rate random walk K", "B": "bias instability B"}
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One noise parameter in SI units, and where it came from."""
+
+    value: float | None
+    how: str
+    interval: tuple[float, float] | None = None
+    level: float | None = None
+    """Probability of ``interval`` (0.90 for the posterior's, the Allan confidence else)."""
+
+    def describe(self) -> str:
+        if self.interval is None:
+            return self.how
+        low, high = self.interval
+        return f"{self.how}, {100 * self.level:g}% interval [{low:.3e}, {high:.3e}]"
+
+
+@dataclass(frozen=True)
+class SensorNoise:
+    """What an export says about one sensor (gyroscope or accelerometer), in SI units."""
+
+    sensor: str
+    channel: str
+    source: str
+    rate_hz: float
+    estimates: dict[str, Estimate]
+    temperature_bias: float | None = None
+    """Linear temperature coefficient of the bias, SI unit per degC, when known."""
+
+
+def _number(value: float) -> str:
+    """A float every YAML reader (PyYAML's YAML 1.1 included) and MATLAB reads as one:
+    mantissa with a point, exponent with a sign."""
+    return f"{value:.9e}"
+
+
+def sensor_of_unit(unit: str, channel: str, source: str | None = None) -> tuple[str, float]:
+    """The sensor a channel in ``unit`` belongs to and the factor from ``unit`` to SI."""
+    parsed = parse_unit(unit)
+    sensor = _SENSOR_OF_QUANTITY.get(parsed.quantity)
+    if sensor is None:
+        raise InputError(
+            f"--export needs an angular rate or an acceleration, but the channel is in '{unit}'",
+            source=source,
+            column=channel,
+            fix="pass --unit (deg/s, rad/s, m/s^2, g ...) for a channel in counts",
+        )
+    return sensor, parsed.to_si
+
+
+def estimates_from_result(result: dict, to_si: float) -> dict[str, Estimate]:
+    """N, K and B of a ``bayescal noise`` result in SI units: posterior means when the
+    posterior passed its checks, else the classical slope readings."""
+    bayesian = result.get("bayesian")
+    parameters = {}
+    if bayesian is not None and bayesian["diagnostics"]["passed"]:
+        parameters = bayesian["parameters"]
+    failed = bayesian is not None and not bayesian["diagnostics"]["passed"]
+    estimates = {}
+    for name in ("N", "K", "B"):
+        if name in parameters:
+            entry = parameters[name]
+            estimates[name] = Estimate(
+                entry["mean"] * to_si,
+                "posterior mean",
+                (entry["q05"] * to_si, entry["q95"] * to_si),
+                bayesian["interval"],
+            )
+            continue
+        reading = result["classical"]["slope_readings"].get(name)
+        why = " (the posterior failed its health checks)" if failed else ""
+        if reading is None:
+            estimates[name] = Estimate(None, "not estimated")
+        elif reading["kind"] == "reading" and reading["value"] is not None:
+            low, high = reading["ci_low"], reading["ci_high"]
+            interval = (low * to_si, high * to_si) if None not in (low, high) else None
+            estimates[name] = Estimate(
+                reading["value"] * to_si,
+                f"classical Allan slope reading{why}",
+                interval,
+                result["classical"]["allan"]["confidence"],
+            )
+        elif reading["ci_high"] is not None:
+            estimates[name] = Estimate(
+                reading["ci_high"] * to_si,
+                f"classical upper bound: the Allan curve has no stretch of its slope{why}",
+            )
+        else:
+            estimates[name] = Estimate(None, "not estimated")
+    return estimates
+
+
+@dataclass
+class _Plan:
+    format: str
+    path: Path
+    sensor: str
+    to_si: float
+    topic: str | None
+    existing: dict = field(default_factory=dict)
+
+
+def plan_exports(
+    requests: list[list[str]] | None, unit: str, channel: str, source: str, topic: str | None
+) -> list[_Plan]:
+    """Check every ``--export FORMAT PATH`` before the analysis runs: the format, that PATH
+    can be written, that a file already there is one to add to, and that the channel is a
+    gyro or accelerometer in a physical unit."""
+    plans = []
+    for requested_format, path_text in requests or ():
+        export_format = requested_format.lower()
+        argument = f"--export {requested_format}"
+        if export_format not in FORMATS:
+            raise InputError(
+                f"{argument}: unknown format '{requested_format}'",
+                fix=f"use one of: {', '.join(FORMATS)}",
+            )
+        path = check_writable(path_text, argument)
+        if path.is_dir():
+            raise InputError(f"{argument} {path}: is a folder", fix="give a file name")
+        if path.exists() and not os.access(path, os.W_OK):
+            raise InputError(f"{argument} {path}: the file is not writable")
+        sensor, to_si = sensor_of_unit(unit, channel, source)
+        reader = _read_kalibr if export_format == "kalibr" else _read_matlab
+        existing = reader(path, argument) if path.exists() else {}
+        plans.append(_Plan(export_format, path, sensor, to_si, topic, existing))
+    return plans
+
+
+def write_exports(plans: list[_Plan], result: dict) -> list[str]:
+    """Write every planned export from a ``bayescal noise`` result; one line per file."""
+    lines = []
+    for plan in plans:
+        noise = SensorNoise(
+            plan.sensor,
+            result["channel"],
+            result["source"],
+            result["rate_hz"],
+            estimates_from_result(result, plan.to_si),
+        )
+        if plan.format == "kalibr":
+            text, other = kalibr_yaml(noise, plan.existing, plan.topic)
+        else:
+            text, other = matlab_script(noise, plan.existing)
+        write_atomic(plan.path, text)
+        kept = f"; {other}" if other else ""
+        lines.append(
+            f"bayescal noise: wrote {plan.sensor} noise of {noise.channel} to {plan.path} "
+            f"({plan.format}){kept}"
+        )
+    return lines
+
+
+# --- Kalibr ------------------------------------------------------------------------------
+
+
+def _read_kalibr(path: Path, argument: str) -> dict:
+    """The other sensor's entries, rostopic and bayescal's notes of an existing imu.yaml."""
+    from ruamel.yaml import YAML, YAMLError
+
+    try:
+        content = YAML(typ="safe").load(path.read_text(encoding="utf-8"))
+    except (YAMLError, UnicodeDecodeError) as error:
+        raise InputError(
+            f"{argument} {path}: exists and is not YAML ({str(error).splitlines()[0]})",
+            fix="choose another path, or remove the file",
+        ) from None
+    if content is None:
+        return {}
+    known = {f"{s}_{key}" for s in SENSORS for key in _KALIBR_KEYS.values()} | set(_KALIBR_TOP)
+    if not isinstance(content, dict) or set(content) - known:
+        extra = sorted(map(str, set(content) - known)) if isinstance(content, dict) else []
+        raise InputError(
+            f"{argument} {path}: exists and is not a Kalibr imu.yaml that bayescal can add to"
+            + (f" (it has {', '.join(map(str, extra))})" if extra else ""),
+            fix="choose another path, or remove the file",
+        )
+    return content
+
+
+def _kalibr_sensor_lines(noise: SensorNoise) -> list[str]:
+    sensor = noise.sensor
+    lines = [
+        f"# {sensor.capitalize()}s: {noise.channel} of {noise.source}, {noise.rate_hz:.6g} Hz",
+    ]
+    for parameter in ("N", "K"):
+        estimate = noise.estimates[parameter]
+        key = f"{sensor}_{_KALIBR_KEYS[parameter]}"
+        unit = _KALIBR_UNITS[sensor, parameter]
+        comment = f"[{unit}] {_NAMES[parameter]}: {estimate.describe()}"
+        if estimate.value is None:
+            lines.append(f"# {key}: not estimated from this recording ({comment})")
+        else:
+            lines.append(f"{key}: {_number(estimate.value)}  # {comment}")
+    b = noise.estimates["B"]
+    if b.value is not None:
+        lines.append(
+            f"# {sensor} bias instability B = {b.value:.4e} {_KALIBR_UNITS[sensor, 'B']} "
+            f"({b.how}): not a Kalibr parameter, for reference only"
+        )
+    return lines
+
+
+def _kept_kalibr_lines(sensor: str, existing: dict) -> tuple[list[str], str | None]:
+    keys = [f"{sensor}_{key}" for key in _KALIBR_KEYS.values()]
+    values = {
+        key: existing[key]
+        for key in keys
+        if isinstance(existing.get(key), int | float) and not isinstance(existing[key], bool)
+    }
+    if not values:
+        return [
+            f"# {sensor.capitalize()}s: not measured yet; run 'bayescal noise' on one of "
+            "their channels with '--export kalibr' and this file to add them",
+        ], None
+    notes = existing.get("bayescal", {}) if isinstance(existing.get("bayescal"), dict) else {}
+    origin = notes.get(sensor)
+    lines = [
+        f"# {sensor.capitalize()}s: kept from the file as it was"
+        + (f" ({origin})" if isinstance(origin, str) else "")
+    ]
+    units = {f"{sensor}_{key}": _KALIBR_UNITS[sensor, p] for p, key in _KALIBR_KEYS.items()}
+    lines += [f"{key}: {_number(float(value))}  # [{units[key]}]" for key, value in values.items()]
+    return lines, f"{sensor} entries kept from the existing file"
+
+
+def kalibr_yaml(
+    noise: SensorNoise, existing: dict | None = None, topic: str | None = None
+) -> tuple[str, str | None]:
+    """Kalibr's imu.yaml with ``noise``'s sensor filled in and the other sensor's entries
+    kept from ``existing`` (a parsed imu.yaml); also a note on what was kept, or None."""
+    existing = existing or {}
+    other_sensor = next(s for s in SENSORS if s != noise.sensor)
+    blocks = {noise.sensor: _kalibr_sensor_lines(noise)}
+    blocks[other_sensor], kept = _kept_kalibr_lines(other_sensor, existing)
+    topic_comment = "the IMU topic of the bag"
+    if topic is None:
+        topic = existing.get("rostopic") if isinstance(existing.get("rostopic"), str) else None
+        topic_comment = "kept from the file as it was"
+    if topic is None:
+        topic, topic_comment = _PLACEHOLDER_TOPIC, "PLACEHOLDER: set the IMU topic of your bag"
+    notes = existing.get("bayescal") if isinstance(existing.get("bayescal"), dict) else {}
+    origins = {s: notes[s] for s in SENSORS if isinstance(notes.get(s), str)}
+    if kept is None:
+        origins.pop(other_sensor, None)
+    origin = [f"{noise.channel} of {noise.source} at {noise.rate_hz:.6g} Hz"]
+    origin += [f"{name}: {noise.estimates[name].how}" for name in ("N", "K")]
+    b = noise.estimates["B"]
+    if b.value is not None:
+        origin.append(f"bias instability B = {b.value:.4e} {_KALIBR_UNITS[noise.sensor, 'B']}")
+    origins[noise.sensor] = "; ".join(origin)
+    lines = [
+        f"# Kalibr IMU configuration (imu.yaml), written by bayescal {version('bayescal')}.",
+        "# Kalibr's noise model is continuous-time (Kalibr wiki, IMU Noise Model):",
+        "#   *_noise_density = white-noise density N of IEEE Std 952 [unit/sqrt(Hz)];",
+        "#   *_random_walk   = density of the white noise that drives the bias random walk:",
+        "#                     the rate random walk K of IEEE Std 952 [unit*sqrt(Hz)], that is",
+        "#                     [unit/s/sqrt(Hz)] -- NOT the bias instability B (flicker), which",
+        "#                     Kalibr does not model; B is given in a comment for reference.",
+        "# Kalibr discretises them with update_rate itself: sigma_d = N*sqrt(rate),",
+        "# sigma_bd = K/sqrt(rate). One value per sensor applies to all three axes. The wiki",
+        "# advises inflating them for real-world calibration (unmodelled effects); bayescal",
+        "# gives the measured values, uninflated.",
+        "",
+        *blocks["accelerometer"],
+        "",
+        *blocks["gyroscope"],
+        "",
+        f"rostopic: {json.dumps(topic)}  # {topic_comment}",
+        f"update_rate: {float(noise.rate_hz)!r}  # Hz, the sample rate of {noise.channel}",
+    ]
+    other = origins.get(other_sensor)
+    if other and kept and f" at {noise.rate_hz:.6g} Hz" not in other:
+        lines.append(f"# the {other_sensor} entries were measured at another rate: {other}")
+    lines += ["", "# Where the values come from (ignored by Kalibr):", "bayescal:"]
+    lines += [
+        f"  {sensor}: {json.dumps(origins[sensor])}" for sensor in SENSORS if sensor in origins
+    ]
+    return "\n".join(lines) + "\n", kept
+
+
+# --- MATLAB ------------------------------------------------------------------------------
+
+
+def _read_matlab(path: Path, argument: str) -> dict:
+    """The other sensor's block of a script bayescal wrote, by sensor."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        text = ""
+    if _MATLAB_MARK not in text.split("\n", 1)[0]:
+        raise InputError(
+            f"{argument} {path}: exists and was not written by bayescal",
+            fix="choose another path, or remove the file",
+        )
+    blocks = {}
+    for sensor in SENSORS:
+        start, end = f"%% {sensor}:", f"%% end of {sensor}"
+        if start in text and end in text:
+            begin = text.index(start)
+            blocks[sensor] = text[begin : text.index(end, begin) + len(end)]
+    return blocks
+
+
+def _matlab_block(noise: SensorNoise) -> str:
+    sensor, variable = noise.sensor, _MATLAB_VARIABLE[noise.sensor]
+    lines = [
+        f"%% {sensor}: {noise.channel} of {noise.source}, {noise.rate_hz:.6g} Hz",
+        f"{variable} = {_MATLAB_CLASS[sensor]};",
+    ]
+    for parameter in ("N", "B", "K"):
+        estimate = noise.estimates[parameter]
+        prop = _MATLAB_PROPERTY[parameter]
+        comment = f"{_MATLAB_UNITS[sensor, parameter]}, {_NAMES[parameter]}: {estimate.describe()}"
+        if estimate.value is None:
+            lines.append(f"% {variable}.{prop} not set: not estimated ({comment})")
+        else:
+            lines.append(f"{variable}.{prop} = {_number(estimate.value)}; % {comment}")
+    temperature_unit = _MATLAB_UNITS[sensor, "T"]
+    if noise.temperature_bias is not None and math.isfinite(noise.temperature_bias):
+        lines.append(
+            f"{variable}.TemperatureBias = {_number(noise.temperature_bias)}; "
+            f"% {temperature_unit}, linear thermal coefficient of the bias"
+        )
+    else:
+        lines.append(
+            f"% {variable}.TemperatureBias not set ({temperature_unit}): not measured by "
+            "'bayescal noise'; 'bayescal thermal fit' estimates the bias against temperature"
+        )
+    lines.append(f"{variable}_sample_rate = {float(noise.rate_hz)!r}; % Hz")
+    lines.append(f"%% end of {sensor}")
+    return "\n".join(lines)
+
+
+def matlab_script(noise: SensorNoise, existing: dict | None = None) -> tuple[str, str | None]:
+    """A MATLAB script setting ``gyroparams``/``accelparams`` for ``noise``'s sensor, with
+    the other sensor's block kept from ``existing`` (blocks by sensor); also a note on what
+    was kept, or None."""
+    existing = existing or {}
+    other_sensor = next(s for s in SENSORS if s != noise.sensor)
+    blocks = {noise.sensor: _matlab_block(noise)}
+    kept = None
+    if other_sensor in existing:
+        blocks[other_sensor] = existing[other_sensor]
+        kept = f"{other_sensor} block kept from the existing file"
+    else:
+        blocks[other_sensor] = (
+            f"% {other_sensor}: not measured yet; run 'bayescal noise' on one of its "
+            "channels with '--export matlab' and this file to add it"
+        )
+    header = [
+        f"% IMU noise parameters for MATLAB's imuSensor, {_MATLAB_MARK} {version('bayescal')}.",
+        "% gyroparams / accelparams properties in SI units (MATLAB reference pages gyroparams,",
+        "% accelparams): NoiseDensity = white noise N of IEEE Std 952, BiasInstability = bias",
+        "% instability B (flicker floor / 0.664), RandomWalk = rate random walk K, as in",
+        "% MathWorks' example 'Inertial Sensor Noise Analysis Using Allan Variance'.",
+        "% One value per sensor applies to all three axes. Use, once both sensors are set:",
+        "%   imu = imuSensor('accel-gyro', 'SampleRate', gyro_sample_rate, ...",
+        "%                   'Gyroscope', gyro, 'Accelerometer', accel);",
+        "",
+    ]
+    body = "\n\n".join(blocks[sensor] for sensor in ("gyroscope", "accelerometer"))
+    return "\n".join(header) + body + "\n", kept

@@ -1,0 +1,352 @@
+"""The noise of one static channel, classical and Bayesian side by side, as the JSON document
+of ``bayescal noise`` and as the table it prints."""
+
+import math
+from importlib.metadata import version
+
+from ..classical._noise import ClassicalNoise, SlopeReading
+from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN_ESS
+from ..inference._noise_posterior import NoisePosterior
+from ..models._noise_model import parameter_unit
+from ..models._terms import TERM_OF_PARAMETER
+from ..recording._units import display_values
+
+# Why a classical number and the posterior can disagree, by parameter.
+_WHY = {
+    "N": "at tau = 1 s the -1/2 line also carries the other terms, which the model separates",
+    "B": "the flat floor of the Allan curve is where white noise meets the slower terms "
+    "(a rate random walk, a ramp), not necessarily bias instability",
+    "K": "the +1/2 stretch of the Allan curve also carries bias instability and drift",
+    "Q": "the -1 stretch of the Allan curve also carries white noise",
+}
+
+_READ_AT = {
+    "Q": "-1 line at tau = sqrt(3) s",
+    "N": "-1/2 line at tau = 1 s",
+    "B": "flat floor / 0.664",
+    "K": "+1/2 line at tau = 3 s",
+}
+
+
+def _reading(parameter: str, reading: SlopeReading, unit: str) -> dict:
+    unit_of_parameter = parameter_unit(parameter, unit)
+    return {
+        "value": reading.value,
+        "ci_low": reading.ci_low,
+        "ci_high": reading.ci_high,
+        "unit": unit_of_parameter,
+        "kind": reading.kind,
+        "tau_s": reading.tau_s,
+        "local_slope": reading.local_slope,
+        "read_at": _READ_AT[parameter],
+        "display": {
+            label: {
+                "value": value,
+                "ci_high": display_values(parameter, reading.ci_high, unit)[label],
+            }
+            for label, value in display_values(parameter, reading.value, unit).items()
+        },
+    }
+
+
+def _t_interval_explanation(classical: ClassicalNoise) -> str:
+    check = classical.t_interval
+    if check.valid:
+        return (
+            f"consistent with independent samples: the Allan deviation at tau = "
+            f"{check.tau_s:g} s is {check.ratio:.2f}x the white-noise prediction "
+            f"(interval {check.ratio_ci_low:.2f}-{check.ratio_ci_high:.2f} includes 1)"
+        )
+    return (
+        f"samples are correlated: the Allan deviation at tau = {check.tau_s:g} s is "
+        f"{check.ratio:.2f}x (interval {check.ratio_ci_low:.2f}-{check.ratio_ci_high:.2f}) "
+        f"what independent samples would give, so the Student-t interval is too narrow by "
+        f"about that factor"
+    )
+
+
+def _bayesian_block(fit: NoisePosterior, unit: str) -> dict:
+    parameters = {}
+    for name, summary in fit.parameters.items():
+        unit_of_parameter = parameter_unit(name, unit)
+        entry = {
+            "mean": summary.mean,
+            "sd": summary.sd,
+            "q05": summary.q05,
+            "q95": summary.q95,
+            "map": summary.map,
+            "map_sd": summary.map_sd,
+            "unit": unit_of_parameter,
+        }
+        if name in TERM_OF_PARAMETER:
+            entry["term"] = TERM_OF_PARAMETER[name]
+            entry["display"] = {
+                label: {
+                    key: display_values(name, getattr(summary, key), unit)[label]
+                    for key in ("mean", "q05", "q95")
+                }
+                for label in display_values(name, summary.mean, unit)
+            }
+        parameters[name] = entry
+    diagnostics = fit.diagnostics.as_dict()
+    diagnostics["sampler"] = "emcee ensemble, differential-evolution and snooker moves"
+    diagnostics["criteria"] = {
+        "max_rhat": MAX_RHAT,
+        "min_ess_bulk": MIN_ESS,
+        "acceptance_fraction": list(ACCEPTANCE_RANGE),
+        "steps_per_autocorrelation_time": AUTOCORR_MULTIPLE,
+    }
+    return {
+        "terms": list(fit.terms),
+        "prior": fit.problem.prior.description,
+        "bias_definition": "turn-on bias: the expected reading at the start of the window",
+        "interval": 0.90,
+        "seed": fit.seed,
+        "parameters": parameters,
+        "diagnostics": diagnostics,
+    }
+
+
+def comparison_notes(classical: ClassicalNoise, fit: NoisePosterior, unit: str) -> list[str]:
+    """Where the classical numbers and the posterior disagree beyond their uncertainties,
+    and why."""
+    notes = []
+    bias = fit.parameters["bias"]
+    t_sd = (
+        (classical.bias_ci_high - classical.bias_ci_low)
+        / 2
+        / _normal_quantile(classical.confidence)
+    )
+    ratio = bias.sd / t_sd
+    slow = [
+        f"{name} = {fit.parameters[name].mean:.3g} {parameter_unit(name, unit)}"
+        for name in ("K", "B", "R")
+        if name in fit.parameters
+    ]
+    if ratio > 2:
+        notes.append(
+            f"bias: the posterior's uncertainty is {ratio:.3g}x the Student-t "
+            f"interval's: the model lets the bias wander ({', '.join(slow)}), which the "
+            "t-interval, treating the samples as independent, ignores"
+        )
+    if abs(bias.mean - classical.bias) > 2 * math.hypot(bias.sd, t_sd):
+        notes.append(
+            f"bias: the turn-on bias {bias.mean:.6g} {unit} and the sample mean "
+            f"{classical.bias:.6g} {unit} disagree beyond their uncertainties: the "
+            "bias moved during the record, and the mean is its average"
+        )
+    for name, reading in classical.slope_readings.items():
+        if name not in fit.parameters:
+            continue
+        posterior = fit.parameters[name]
+        unit_of_parameter = parameter_unit(name, unit)
+        if reading.kind == "upper_bound":
+            if posterior.q05 > reading.ci_high:
+                notes.append(
+                    f"{name}: the posterior (5 % quantile {posterior.q05:.3g} "
+                    f"{unit_of_parameter}) lies above the bound the Allan curve allows "
+                    f"({reading.ci_high:.3g}): check the model's terms"
+                )
+            continue
+        if reading.ci_low > posterior.q95 or reading.ci_high < posterior.q05:
+            notes.append(
+                f"{name}: classical {reading.value:.3g} [{reading.ci_low:.3g}, "
+                f"{reading.ci_high:.3g}] and Bayesian {posterior.mean:.3g} "
+                f"[{posterior.q05:.3g}, {posterior.q95:.3g}] {unit_of_parameter} disagree "
+                f"beyond their uncertainties: {_WHY[name]}"
+            )
+    return notes
+
+
+def _normal_quantile(confidence: float) -> float:
+    from scipy import stats
+
+    return float(stats.norm.ppf(0.5 + confidence / 2))
+
+
+def noise_result(
+    data, classical: ClassicalNoise, window: dict, fit: NoisePosterior | None = None
+) -> dict:
+    """The JSON document of ``bayescal noise`` (contract in the README). ``data`` names the
+    channel: its ``source``, ``channel``, ``unit`` and ``notes`` (a Channel or a NoiseFit)."""
+    unit = data.unit
+    allan = classical.allan
+    half_width = (classical.bias_ci_high - classical.bias_ci_low) / 2
+    widening = classical.t_interval.widening
+    result = {
+        "bayescal_version": version("bayescal"),
+        "source": data.source,
+        "channel": data.channel,
+        "unit": unit,
+        "n_samples": classical.n_samples,
+        "rate_hz": classical.rate_hz,
+        "duration_s": classical.duration_s,
+        "window": window,
+        "notes": list(data.notes),
+        "classical": {
+            "bias": {
+                "value": classical.bias,
+                "ci_low": classical.bias_ci_low,
+                "ci_high": classical.bias_ci_high,
+                "confidence": classical.confidence,
+                "unit": unit,
+                "method": "sample mean, Student-t interval",
+                "widened_ci_low": classical.bias - widening * half_width,
+                "widened_ci_high": classical.bias + widening * half_width,
+            },
+            "std": {"value": classical.std, "unit": unit},
+            "t_interval_valid": classical.t_interval.valid,
+            "t_interval_widening": widening,
+            "t_interval_check": {
+                "adev_ratio": classical.t_interval.ratio,
+                "adev_ratio_ci_low": classical.t_interval.ratio_ci_low,
+                "adev_ratio_ci_high": classical.t_interval.ratio_ci_high,
+                "tau_s": classical.t_interval.tau_s,
+                "explanation": _t_interval_explanation(classical),
+            },
+            "allan": {
+                "estimator": "overlapping Allan deviation (NIST SP 1065 eq. 11)",
+                "tau_s": allan.tau,
+                "adev": allan.deviation,
+                "ci_low": allan.ci_low,
+                "ci_high": allan.ci_high,
+                "confidence": allan.confidence,
+                "n_terms": allan.n,
+                "edf": allan.edf,
+                "noise_alpha": allan.alpha,
+                "unit": unit,
+            },
+            "slope_readings": {
+                parameter: _reading(parameter, reading, unit)
+                for parameter, reading in classical.slope_readings.items()
+            },
+        },
+    }
+    if fit is not None:
+        result["bayesian"] = _bayesian_block(fit, unit)
+        result["bayesian"]["comparison"] = comparison_notes(classical, fit, unit)
+    return result
+
+
+def _number(value: float) -> str:
+    return "n/a" if value is None else f"{value:.5g}"
+
+
+def noise_text(result: dict) -> str:
+    """The table ``bayescal noise`` prints, made from its JSON document."""
+    classical = result["classical"]
+    unit = result["unit"]
+    bias = classical["bias"]
+    window = result["window"]
+    percent = f"{100 * bias['confidence']:g}%"
+    lines = [
+        f"bayescal noise: {result['source']}, channel {result['channel']} [{unit}]",
+        f"  {result['n_samples']} samples at {result['rate_hz']:.6g} Hz, "
+        f"{result['duration_s']:.6g} s (window {window['start_s']:.6g}-{window['stop_s']:.6g} s, "
+        f"{window['selected_by']})",
+        "",
+        f"  bias          {_number(bias['value'])} {unit}   {percent} Student-t interval "
+        f"[{_number(bias['ci_low'])}, {_number(bias['ci_high'])}]",
+        f"  std           {_number(classical['std']['value'])} {unit}",
+    ]
+    check = classical["t_interval_check"]
+    if classical["t_interval_valid"]:
+        lines.append(f"  t-interval    valid: {check['explanation']}")
+    else:
+        lines.append(f"  t-interval    NOT VALID: {check['explanation']}")
+        lines.append(
+            f"                widened x{classical['t_interval_widening']:.3g}: "
+            f"[{_number(bias['widened_ci_low'])}, {_number(bias['widened_ci_high'])}] {unit}"
+        )
+    allan = classical["allan"]
+    lines += [
+        "",
+        f"  Allan deviation (overlapping), {100 * allan['confidence']:g}% chi-square "
+        "intervals (Greenhall EDF)",
+        f"  {'tau [s]':>12} {'ADEV [' + unit + ']':>18} {'low':>12} {'high':>12} {'alpha':>6}",
+    ]
+    for tau, dev, low, high, alpha in zip(
+        allan["tau_s"],
+        allan["adev"],
+        allan["ci_low"],
+        allan["ci_high"],
+        allan["noise_alpha"],
+        strict=True,
+    ):
+        lines.append(
+            f"  {tau:>12.5g} {_number(dev):>18} {_number(low):>12} {_number(high):>12} {alpha:>6}"
+        )
+    lines += ["", "  IEEE 952 slope readings"]
+    for parameter, reading in classical["slope_readings"].items():
+        shown = f"{_number(reading['value'])} {reading['unit']}"
+        if reading["kind"] == "upper_bound":
+            shown = f"<= {_number(reading['ci_high'])} {reading['unit']}"
+        shown_key = "value" if reading["kind"] == "reading" else "ci_high"
+        extra = "".join(
+            f" = {_number(item[shown_key])} {label}" for label, item in reading["display"].items()
+        )
+        how = (
+            reading["read_at"]
+            if reading["kind"] == "reading"
+            else "no stretch of its slope: upper bound from the whole curve"
+        )
+        lines.append(f"  {parameter}  {shown}{extra}   ({how})")
+    if "bayesian" in result:
+        lines += _side_by_side(result)
+    if result["notes"]:
+        lines += ["", "  notes:"] + [f"  - {note}" for note in result["notes"]]
+    return "\n".join(lines)
+
+
+def _side_by_side(result: dict) -> list[str]:
+    classical, bayesian = result["classical"], result["bayesian"]
+    percent = f"{100 * classical['bias']['confidence']:g}%"
+    lines = [
+        "",
+        f"  classical ({percent} intervals) and Bayesian (posterior mean, 90% interval; "
+        f"MAP +- Laplace sd); terms: {', '.join(bayesian['terms'])}",
+        f"  {'':6}{'unit':<16}{'classical':<38}{'Bayesian':<40}MAP",
+    ]
+    for name, entry in bayesian["parameters"].items():
+        if name == "bias":
+            bias = classical["bias"]
+            shown = (
+                f"{_number(bias['value'])} [{_number(bias['ci_low'])}, {_number(bias['ci_high'])}]"
+            )
+        elif name in classical["slope_readings"]:
+            reading = classical["slope_readings"][name]
+            shown = (
+                f"<= {_number(reading['ci_high'])}"
+                if reading["kind"] == "upper_bound"
+                else f"{_number(reading['value'])} [{_number(reading['ci_low'])}, "
+                f"{_number(reading['ci_high'])}]"
+            )
+        else:
+            shown = "-"
+        posterior = f"{_number(entry['mean'])} [{_number(entry['q05'])}, {_number(entry['q95'])}]"
+        lines.append(
+            f"  {name:<6}{entry['unit']:<16}{shown:<38}{posterior:<40}"
+            f"{_number(entry['map'])} +- {_number(entry['map_sd'])}"
+        )
+    for name, entry in bayesian["parameters"].items():
+        for label, shown in entry.get("display", {}).items():
+            lines.append(
+                f"  {name:<6}{label:<16}{'':<38}{_number(shown['mean'])} "
+                f"[{_number(shown['q05'])}, {_number(shown['q95'])}]"
+            )
+    diagnostics = bayesian["diagnostics"]
+    if diagnostics["passed"]:
+        lines.append(
+            f"  posterior checks passed: {diagnostics['n_steps']} steps x "
+            f"{diagnostics['n_walkers']} walkers, autocorrelation time <= "
+            f"{max(diagnostics['autocorr_time'].values()):.0f}, ESS >= "
+            f"{min(diagnostics['ess_bulk'].values()):.0f}, R-hat <= "
+            f"{max(diagnostics['rhat'].values()):.3f}, acceptance "
+            f"{diagnostics['acceptance_fraction']:.2f}"
+        )
+    else:
+        lines.append("  POSTERIOR CHECKS FAILED — do not use these Bayesian numbers:")
+        lines += [f"    - {failure}" for failure in diagnostics["failures"]]
+    if bayesian["comparison"]:
+        lines += ["", "  where they disagree:"] + [f"  - {note}" for note in bayesian["comparison"]]
+    return lines

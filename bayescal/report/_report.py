@@ -1,0 +1,269 @@
+"""The report of one recording: the noise analysis of every channel, classical and Bayesian,
+written as one self-contained HTML page per sensor plus the JSON and the ArviZ netCDF behind
+it (``bayescal report`` and ``bayescal demo``).
+
+Files in the output folder, for a recording ``imu.csv``: ``imu_report.html`` (the page),
+``imu_report.json`` (every channel's ``noise`` document, the numbers behind the figures, the
+datasheet comparison, the discovery findings) and ``imu_<channel>_posterior.nc`` per channel.
+Each is written atomically.
+"""
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from .._errors import InputError
+from .._output import write_atomic, write_json, write_netcdf
+from ..capabilities._noise import fit_noise
+from ..inference._datatree import noise_datatree
+from ..models._terms import parse_terms
+from ..recording._recording import Channel, prepare_channel
+from ..recording._sensor_cards import find_card
+from ._html import (
+    ChannelAnalysis,
+    build_report,
+    datasheet_comparison,
+    posterior_bands,
+    report_document,
+)
+from ._noise import noise_result
+
+DEFAULT_TERMS = "white,bias_instability,rate_random_walk"
+
+
+@dataclass
+class ReportOutcome:
+    html: Path
+    json: Path
+    posteriors: dict
+    analyses: list
+    failed: list
+
+    @property
+    def passed(self) -> bool:
+        return not self.failed
+
+
+def analyse_channel(
+    data: Channel,
+    *,
+    terms: tuple[str, ...],
+    confidence: float = 0.95,
+    taus="octave",
+    card=None,
+    seed: int = 0,
+    n_walkers: int = 32,
+    max_steps: int = 40_000,
+    progress: bool = False,
+    window: dict | None = None,
+) -> ChannelAnalysis:
+    """Classical and Bayesian noise of one prepared channel, with the posterior bands of the
+    figures and, with a sensor card, the datasheet comparison."""
+    fit = fit_noise(
+        data,
+        terms=terms,
+        sensor=card,
+        sensor_fallback=True,
+        seed=seed,
+        confidence=confidence,
+        taus=taus,
+        n_walkers=n_walkers,
+        max_steps=max_steps,
+        progress=progress,
+    )
+    window = {"start_s": data.start_s, "stop_s": data.stop_s, **(window or {})}
+    window_notes = window.pop("notes", [])
+    result = noise_result(fit, fit.classical, window, fit.fit)
+    result["notes"] = list(window_notes) + result["notes"]
+    analysis = ChannelAnalysis(data=data, classical=fit.classical, result=result, fit=fit.fit)
+    posterior_bands(analysis, seed=seed)
+    if card is not None:
+        analysis.datasheet = datasheet_comparison(card, analysis)
+    return analysis
+
+
+def report_recording(
+    table,
+    channels: list[str],
+    folder,
+    *,
+    stem: str,
+    title: str | None = None,
+    sensor: str | None = None,
+    terms: str = DEFAULT_TERMS,
+    confidence: float = 0.95,
+    taus="octave",
+    seed: int = 0,
+    n_walkers: int = 32,
+    max_steps: int = 40_000,
+    rate: float | None = None,
+    time_column: str | None = None,
+    time_unit: str | None = None,
+    gaps: str = "error",
+    start: float | None = None,
+    stop: float | None = None,
+    window: dict | None = None,
+    discoveries=None,
+    progress: bool = False,
+) -> ReportOutcome:
+    """Analyse ``channels`` of ``table`` and write the page, its JSON and the posteriors into
+    ``folder``.
+
+    ``discoveries``: discovery findings to show on the page and keep in the JSON, either a
+    dict channel -> findings, or a function ``(table, data) -> findings or None`` called for
+    each channel with the recording and the channel's prepared data
+    (:class:`~bayescal.Channel`), after its noise analysis.
+    """
+    parsed_terms = parse_terms(terms)
+    card = find_card(sensor) if sensor else None
+    if not channels:
+        raise InputError(
+            "no channels to report",
+            source=table.source,
+            fix="name them with --channels gyro_x,gyro_y,...",
+        )
+    if len(set(channels)) != len(channels):
+        raise InputError("--channels names a column twice", fix="name each column once")
+    prepared = [
+        prepare_channel(
+            table,
+            channel,
+            rate=rate,
+            time_column=time_column,
+            time_unit=time_unit,
+            start=start,
+            stop=stop,
+            gaps=gaps,
+        )
+        for channel in channels
+    ]
+    folder = Path(folder)
+    folder.mkdir(exist_ok=True)
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(prepared) + 1, desc="report", unit="step", file=sys.stderr)
+    settings = {
+        "terms": ", ".join(parsed_terms),
+        "sensor card": card.name if card else "none (weakly informative priors)",
+        "confidence of classical intervals": f"{100 * confidence:g} %",
+        "seed": str(seed),
+    }
+    analyses, found_by_channel = [], {}
+    try:
+        for data in prepared:
+            if bar is not None:
+                bar.set_postfix_str(data.channel)
+            analyses.append(
+                analyse_channel(
+                    data,
+                    terms=parsed_terms,
+                    confidence=confidence,
+                    taus=taus,
+                    card=card,
+                    seed=seed,
+                    n_walkers=n_walkers,
+                    max_steps=max_steps,
+                    progress=progress,
+                    window=dict(window or {"selected_by": "whole record"}),
+                )
+            )
+            if callable(discoveries):
+                found = discoveries(table, data)
+                if found is not None:
+                    found_by_channel[data.channel] = found
+            if bar is not None:
+                bar.update(1)
+        if not callable(discoveries):
+            found_by_channel = dict(discoveries or {})
+        if bar is not None:
+            bar.set_postfix_str("figures and files")
+        outcome = write_report(
+            folder,
+            analyses,
+            stem=stem,
+            title=title or f"bayescal report: {Path(stem).name}",
+            source=table.source,
+            discoveries=found_by_channel,
+            settings=settings,
+        )
+        if bar is not None:
+            bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    return outcome
+
+
+def write_report(
+    folder,
+    analyses: list,
+    *,
+    stem: str,
+    title: str,
+    source: str,
+    discoveries: dict | None = None,
+    settings: dict | None = None,
+) -> ReportOutcome:
+    """Write the page, its JSON and each channel's posterior (ArviZ netCDF) into ``folder``,
+    each atomically."""
+    folder = Path(folder)
+    html_path = folder / f"{stem}_report.html"
+    json_path = folder / f"{stem}_report.json"
+    posteriors = {}
+    for analysis in analyses:
+        if analysis.fit is None:
+            continue
+        path = folder / f"{stem}_{analysis.channel}_posterior.nc"
+        tree = noise_datatree(
+            analysis.fit, analysis.unit, channel=analysis.channel, source=analysis.data.source
+        )
+        write_netcdf(tree, path)
+        posteriors[analysis.channel] = path
+    files = {
+        "JSON": json_path.name,
+        **{f"posterior {channel} (ArviZ netCDF)": p.name for channel, p in posteriors.items()},
+    }
+    page = build_report(
+        analyses,
+        title=title,
+        source=source,
+        discoveries=discoveries,
+        files=files,
+        settings=settings,
+    )
+    write_json(
+        json_path,
+        report_document(analyses, title=title, source=source, discoveries=discoveries, files=files),
+    )
+    write_atomic(html_path, page)
+    failed = [a for a in analyses if not a.passed]
+    return ReportOutcome(html_path, json_path, posteriors, analyses, failed)
+
+
+def summary_text(outcome: ReportOutcome) -> str:
+    """The lines the command prints: one per channel, then where the page is."""
+    lines = []
+    for analysis in outcome.analyses:
+        result = analysis.result
+        parameters = result["bayesian"]["parameters"]
+        unit = result["unit"]
+        noise = "  ".join(
+            f"{name} {parameters[name]['mean']:.3g} {parameters[name]['unit']}"
+            for name in ("N", "B", "K")
+            if name in parameters
+        )
+        classical = result["classical"]
+        t_text = (
+            "t-interval valid"
+            if classical["t_interval_valid"]
+            else f"t-interval too narrow x{classical['t_interval_widening']:.3g}"
+        )
+        health = "checks passed" if analysis.passed else "HEALTH CHECK FAILED"
+        lines.append(
+            f"  {analysis.channel:<8} bias {parameters['bias']['mean']:.6g} {unit}  {noise}  "
+            f"({t_text}; {health})"
+        )
+    lines.append(f"report: {outcome.html}")
+    return "\n".join(lines)

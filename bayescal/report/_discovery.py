@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from .._output import atomic_path, to_jsonable, write_json, write_netcdf
+from .._output import atomic_path, file_stem, to_jsonable, write_json, write_netcdf
 from ..capabilities._discovery import CheckResult, Discovery, SearchResult, discover
 from ..inference._mcmc import summarize
 from ..models._composite import bin_ratios
@@ -360,7 +360,7 @@ def write_folder(folder: Path, discovery: Discovery, document: dict) -> None:
     """Figures (PNG), the curves and the findings (JSON), the final posterior (netCDF)."""
     folder = Path(folder)
     folder.mkdir(exist_ok=True)
-    stem = f"discover_{document['channel']}"
+    stem = f"discover_{file_stem(document['channel'])}"
     curves = document.get("diagnostics") or diagnostics(discovery.result)
     for name, figure in _figures(curves, document["channel"]).items():
         with atomic_path(folder / f"{stem}_{name}.png") as temporary:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .._errors import InputError
-from .._output import write_atomic, write_json, write_netcdf
+from .._output import file_stem, write_atomic, write_json, write_netcdf
 from ..capabilities._noise import fit_noise
 from ..inference._datatree import noise_datatree
 from ..models._terms import parse_terms
@@ -102,12 +102,16 @@ def report_recording(
     gaps: str = "error",
     start: float | None = None,
     stop: float | None = None,
+    options: dict | None = None,
     window: dict | None = None,
     discoveries=None,
     progress: bool = False,
 ) -> ReportOutcome:
     """Analyse ``channels`` of ``table`` and write the page, its JSON and the posteriors into
     ``folder``.
+
+    ``options``: channel -> more arguments of :func:`~bayescal.recording._recording.
+    prepare_channel` for it (its ``unit``, its ``scale``).
 
     ``discoveries``: discovery findings to show on the page and keep in the JSON, either a
     dict channel -> findings, or a function ``(table, data) -> findings or None`` called for
@@ -134,6 +138,7 @@ def report_recording(
             start=start,
             stop=stop,
             gaps=gaps,
+            **(options or {}).get(channel, {}),
         )
         for channel in channels
     ]
@@ -215,7 +220,7 @@ def write_report(
     for analysis in analyses:
         if analysis.fit is None:
             continue
-        path = folder / f"{stem}_{analysis.channel}_posterior.nc"
+        path = folder / f"{stem}_{file_stem(analysis.channel)}_posterior.nc"
         tree = noise_datatree(
             analysis.fit, analysis.unit, channel=analysis.channel, source=analysis.data.source
         )

@@ -508,7 +508,9 @@ def test_npy_and_nd_npz_with_chosen_axes(run_cli, tmp_path, plain):
     np.save(tmp_path / "imu.npy", table)
     found, _ = _result(run_cli, tmp_path / "imu.npy", tmp_path, "--names", "time,gyro_x,other")
     assert found == expected
-    code, _, stderr = run_cli("noise", tmp_path / "imu.npy", "--channel", "imu_1", "--rate", "100")
+    code, _, stderr = run_cli(
+        "noise", tmp_path / "imu.npy", "--channel", "imu_1", "--rate", "100", "--classical-only"
+    )
     assert code == 0, stderr
 
     # recordings x axes x samples, as a study keeps several runs of a 3-axis gyro.

@@ -312,7 +312,7 @@ def load(args, path=None):
     )
 
 
-def unit_and_scale(args, name: str) -> tuple[str | None, float | None]:
+def unit_and_scale(args, name: str | None) -> tuple[str | None, float | None]:
     """The unit and scale factor of channel ``name``: ``--unit`` and ``--scale`` as given,
     or, for ``--scale SENSOR``, the resolution of that sensor card's gyro or accelerometer
     (chosen by ``--unit``, else by the channel's name) in ``--unit`` or in its own unit."""
@@ -325,7 +325,7 @@ def unit_and_scale(args, name: str) -> tuple[str | None, float | None]:
 
     card = find_card(given)
     quantity = parse_unit(args.unit).quantity if args.unit else None
-    if quantity is None:
+    if quantity is None and name is not None:
         if is_gyro_name(name) and not is_accel_name(name):
             quantity = "angular_rate"
         elif is_accel_name(name) and not is_gyro_name(name):
@@ -349,7 +349,7 @@ def unit_and_scale(args, name: str) -> tuple[str | None, float | None]:
     return target.name, float(entry["value"]) * resolution.to_si / target.to_si
 
 
-def grid_options(args, name: str) -> dict:
+def grid_options(args, name: str | None = None) -> dict:
     """How channel ``name`` is read and put on its sample grid, from the recording
     arguments."""
     unit, factor = unit_and_scale(args, name)
@@ -401,6 +401,14 @@ def channel_of(args, recording, name: str, **extra):
     start, stop, described = window(args, recording)
     channel = recording.channel(name, start=start, stop=stop, **grid_options(args, name), **extra)
     return channel, {"start_s": channel.start_s, "stop_s": channel.stop_s, **described}
+
+
+def output_folder(path):
+    """``--out DIR``: a folder that exists or whose parent does (checked before any work).
+    :func:`declare_outputs` also makes it one of the run's outputs."""
+    from .._output import check_folder
+
+    return None if path is None else check_folder(path, "--out")
 
 
 def declare_outputs(inputs=(), files: dict | None = None, folders: dict | None = None):

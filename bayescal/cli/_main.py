@@ -17,8 +17,6 @@ from .._errors import BayescalError
 from . import _discover, _multi_position, _noise, _report, _sensors, _thermal, _two_position
 
 INTERNAL_ERROR = 3
-INTERRUPTED = 128 + signal.SIGINT
-TERMINATED = 128 + signal.SIGTERM
 COMMANDS = (_noise, _two_position, _thermal, _report, _multi_position, _discover, _sensors)
 
 
@@ -57,6 +55,10 @@ def _enable_compilation_cache() -> None:
 
 def _command(args) -> str:
     return " ".join(part for part in (args.command, getattr(args, "step", None)) if part)
+
+
+INTERRUPTED = 128 + signal.SIGINT
+TERMINATED = 128 + signal.SIGTERM
 
 
 class _Terminated(BaseException):

@@ -162,7 +162,7 @@ def run(args) -> int:
     result = noise_result(fit or channel, classical, window, fit.fit if fit else None)
     result["notes"] = window.pop("notes", []) + result["notes"]
     if result.get("bayesian"):
-        result["notes"] += walker_note(result["bayesian"]["diagnostics"], args.walkers)
+        result["notes"] += walker_note(result["bayesian"].get("diagnostics", {}), args.walkers)
     if args.json:
         write_json(args.json, result)
     exported = write_exports(exports, result)

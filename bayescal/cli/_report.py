@@ -141,7 +141,8 @@ def run(args) -> int:
     print(f"bayescal report: {recording.source}")
     print(summary_text(outcome))
     for analysis in outcome.analyses:
-        for note in walker_note(analysis.result["bayesian"]["diagnostics"], args.walkers):
+        diagnostics = (analysis.result.get("bayesian") or {}).get("diagnostics", {})
+        for note in walker_note(diagnostics, args.walkers):
             print(f"  note: {analysis.channel}: {note}")
     return _health(outcome, "report")
 

@@ -278,7 +278,7 @@ def text_cell_problem(values: np.ndarray) -> tuple[str, str] | None:
         )
     if len(bad) <= 0.5 * len(present):
         return (
-            f"is not numeric: data row {row + 1} holds '{shown}'" + comma_decimal_hint(text),
+            f"is not numeric: data row {row + 1} holds '{shown}'" + _comma_decimal_hint(text),
             "repair that cell (an empty cell is read as a missing value)",
         )
     return (
@@ -287,7 +287,7 @@ def text_cell_problem(values: np.ndarray) -> tuple[str, str] | None:
     )
 
 
-def comma_decimal_hint(text: str) -> str:
+def _comma_decimal_hint(text: str) -> str:
     return " (a decimal comma?)" if _COMMA_NUMBER.match(text) else ""
 
 

@@ -751,6 +751,8 @@ def _time_base(
         )
     time, time_note, declared = _time_in_seconds(table, time_name, time_unit)
     _check_time_order(time, _Place(row_offset=table.row_offset), table.source, time_name)
+    # The unit of the stamps judged on the whole record, before any window is cut from it.
+    _check_rate(1.0 / float(np.median(np.diff(time))), declared, table.source, time_name)
     raw = table.columns[time_name]
     return time - time[0], time_name, [time_note] if time_note else [], declared, raw
 

@@ -106,10 +106,9 @@ def main() -> int:
                     for name, value in effect.parameters.items()
                     if "q05" in value
                 )
-                print(
-                    f"    + {effect.name}: log BF {effect.evidence['log_bayes_factor']:.1f}; "
-                    f"{shown}"
-                )
+                factor = effect.evidence["log_bayes_factor"]
+                evidence = "on a grid" if factor is None else f"log BF {factor:.1f}"
+                print(f"    + {effect.name}: {evidence}; {shown}")
             still = [check.name for check in found.checks if not check.passed_after]
             print(f"    final checks failed: {', '.join(still) or 'none'}")
             if not found.passed:

@@ -17,6 +17,7 @@ import time
 from scipy import stats
 
 import bayescal as bc
+from bayescal.models._terms import CLASSICAL_TERMS
 
 RATE = 10.0
 TRUTH = {"bias": 0.4, "N": 0.005, "B": 2e-3, "K": 3e-4}
@@ -35,7 +36,7 @@ def main() -> None:
     start = time.perf_counter()
     for seed in range(args.simulations):
         values = model.simulate(args.samples, seed=20_000 + seed)
-        fit = bc.fit_noise(values, RATE, seed=seed)
+        fit = bc.fit_noise(values, RATE, terms=CLASSICAL_TERMS, seed=seed)
         unhealthy += not fit.passed
         for name in names:
             summary = fit.parameters[name]

@@ -22,7 +22,7 @@ from bayescal.inference._noise_posterior import noise_mode
 from bayescal.inference._priors import default_prior
 from bayescal.models._level import level_summary
 from bayescal.models._noise_problem import NoiseProblem
-from bayescal.models._terms import DEFAULT_TERMS
+from bayescal.models._terms import CLASSICAL_TERMS
 from bayescal.models._whittle import spectral_summary
 
 RATE = 10.0
@@ -35,7 +35,7 @@ def map_estimate(values: np.ndarray, classical: bc.ClassicalNoise) -> dict:
     problem = NoiseProblem(
         spectral_summary(values, RATE),
         level_summary(values, RATE),
-        default_prior(DEFAULT_TERMS, classical.allan),
+        default_prior(CLASSICAL_TERMS, classical.allan),
     )
     mode = noise_mode(problem)
     return {name: float(value) for name, value in problem.natural(mode.theta).items()}
@@ -69,7 +69,7 @@ def main() -> None:
         wls = allan_wls_fit(values, RATE)
         estimates["allantools AVAR WLS"].append([wls[p] for p in PARAMETERS])
         if seed < args.posterior:
-            fit = bc.fit_noise(values, RATE, terms=DEFAULT_TERMS, seed=seed)
+            fit = bc.fit_noise(values, RATE, terms=CLASSICAL_TERMS, seed=seed)
             unhealthy += not fit.passed
             estimates["bayescal posterior mean"].append(
                 [fit.parameters[p].mean for p in PARAMETERS]

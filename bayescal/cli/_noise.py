@@ -14,7 +14,7 @@ from ._arguments import (
     taus,
 )
 
-DEFAULT_TERMS = "white,bias_instability,rate_random_walk"
+DEFAULT_TERMS = "auto"
 
 
 def add_parser(commands) -> None:
@@ -65,9 +65,10 @@ def add_parser(commands) -> None:
     bayes.add_argument(
         "--terms",
         default=DEFAULT_TERMS,
-        help="noise terms beside the bias: white, bias_instability (flicker), "
-        "rate_random_walk (rrw), quantization, rate_ramp (ramp), output_filter, or all "
-        f"(default: {DEFAULT_TERMS})",
+        help="noise terms beside the bias: auto (the default: white noise and every term "
+        "the record holds decisive evidence for), or a list of white, bias_instability "
+        "(flicker), rate_random_walk (rrw), quantization, rate_ramp (ramp), output_filter "
+        "(one-tap), decimation_filter, butterworth_filter, or all",
     )
     bayes.add_argument(
         "--sensor",
@@ -149,7 +150,7 @@ def run(args) -> int:
             progress=progress(args),
         )
         classical = fit.classical
-    result = noise_result(fit or channel, classical, window, fit.fit if fit else None)
+    result = noise_result(fit or channel, classical, window, fit)
     result["notes"] = window.pop("notes", []) + result["notes"]
     if args.json:
         write_json(args.json, result)

@@ -41,7 +41,7 @@ from ..inference._optimize import maximum_a_posteriori
 from ..inference._priors import default_prior
 from ..models._noise_model import parameter_unit
 from ..models._noise_problem import NoisePrior
-from ..models._terms import parse_terms
+from ..models._terms import AUTO, check_terms, parse_terms
 from ..models._thermal import (
     MAX_DEGREE,
     ThermalProblem,
@@ -750,7 +750,12 @@ def fit_thermal(
     >>> calibration.coefficients.round(2)
     array([0.5 , 0.01])
     """
-    noise_terms = parse_terms(terms) if isinstance(terms, str) else tuple(terms)
+    noise_terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
+    if noise_terms == AUTO:
+        raise InputError(
+            "--terms auto: a thermal calibration takes its noise terms as given",
+            fix=f"name them (default: {','.join(NOISE_TERMS)})",
+        )
     if "rate_ramp" in noise_terms:
         raise InputError("--terms: a ramp cannot be told from a thermal drift; leave it out")
     if degree != "auto" and not (

@@ -17,7 +17,7 @@ from ._arguments import (
     walkers,
 )
 
-DEFAULT_TERMS = "white,bias_instability,rate_random_walk"
+DEFAULT_TERMS = "auto"
 
 
 def add_parser(commands) -> None:
@@ -75,9 +75,10 @@ def add_parser(commands) -> None:
     bayes.add_argument(
         "--terms",
         default=DEFAULT_TERMS,
-        help="noise terms beside the bias: white, bias_instability (flicker), "
-        "rate_random_walk (rrw), quantization, rate_ramp (ramp), output_filter, or all "
-        f"(default: {DEFAULT_TERMS})",
+        help="noise terms beside the bias: auto (the default: white noise and every term "
+        "the record holds decisive evidence for), or a list of white, bias_instability "
+        "(flicker), rate_random_walk (rrw), quantization, rate_ramp (ramp), output_filter "
+        "(one-tap), decimation_filter, butterworth_filter, or all",
     )
     bayes.add_argument(
         "--sensor",
@@ -159,7 +160,7 @@ def run(args) -> int:
             progress=progress(args),
         )
         classical = fit.classical
-    result = noise_result(fit or channel, classical, window, fit.fit if fit else None)
+    result = noise_result(fit or channel, classical, window, fit)
     result["notes"] = window.pop("notes", []) + result["notes"]
     if result.get("bayesian"):
         result["notes"] += walker_note(result["bayesian"].get("diagnostics", {}), args.walkers)

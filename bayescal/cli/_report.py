@@ -22,7 +22,7 @@ from ._arguments import (
     window,
 )
 
-DEFAULT_TERMS = "white,bias_instability,rate_random_walk"
+DEFAULT_TERMS = "auto"
 
 
 def add_parser(commands) -> None:
@@ -85,7 +85,7 @@ def add_parser(commands) -> None:
 def _health(outcome, command: str) -> int:
     return health_exit(
         command,
-        [f"{a.channel}: {', '.join(a.fit.diagnostics.failures)}" for a in outcome.failed],
+        [f"{a.channel}: {', '.join(a.failures)}" for a in outcome.failed],
     )
 
 

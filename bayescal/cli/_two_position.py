@@ -159,5 +159,5 @@ def run(args) -> int:
     if args.json:
         write_json(args.json, result)
     print(two_position_text(result))
-    failures = [] if calibration.passed else list(calibration.bayesian.noise.diagnostics.failures)
+    failures = list(calibration.failures)
     return health_exit("two-position", failures)

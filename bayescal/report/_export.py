@@ -179,7 +179,7 @@ def estimates_from_result(result: dict, to_si: float) -> dict[str, Estimate]:
         elif reading["ci_high"] is not None:
             estimates[name] = Estimate(
                 reading["ci_high"] * to_si,
-                f"classical upper bound: the Allan curve has no stretch of its slope{why}",
+                f"classical upper bound ({reading.get('read_at', 'no stretch of its slope')}){why}",
             )
         else:
             estimates[name] = Estimate(None, "not estimated")

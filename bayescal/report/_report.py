@@ -28,7 +28,7 @@ from ._html import (
 )
 from ._noise import noise_result
 
-DEFAULT_TERMS = "white,bias_instability,rate_random_walk"
+DEFAULT_TERMS = "auto"
 
 
 @dataclass
@@ -73,7 +73,7 @@ def analyse_channel(
     )
     window = {"start_s": data.start_s, "stop_s": data.stop_s, **(window or {})}
     window_notes = window.pop("notes", [])
-    result = noise_result(fit, fit.classical, window, fit.fit)
+    result = noise_result(fit, fit.classical, window, fit)
     result["notes"] = list(window_notes) + result["notes"]
     analysis = ChannelAnalysis(data=data, classical=fit.classical, result=result, fit=fit.fit)
     posterior_bands(analysis, seed=seed)
@@ -150,7 +150,9 @@ def report_recording(
 
         bar = tqdm(total=len(prepared) + 1, desc="report", unit="step", file=sys.stderr)
     settings = {
-        "terms": ", ".join(parsed_terms),
+        "terms": "chosen by evidence per channel (auto)"
+        if parsed_terms == "auto"
+        else ", ".join(parsed_terms),
         "sensor card": card.name if card else "none (weakly informative priors)",
         "confidence of classical intervals": f"{100 * confidence:g} %",
         "seed": str(seed),

@@ -2,6 +2,7 @@
 argument), where the problem is, and what to do; and writes no output."""
 
 import os
+import re
 
 import numpy as np
 import pytest
@@ -811,4 +812,5 @@ def test_walkers_raised_are_noted(run_cli, tmp_path, good_columns):
         "noise", path, "--channel", "gyro_x", "--walkers", "3", "--max-steps", "300", "--quiet"
     )
     assert code in (0, 1), stderr  # 300 steps may not converge: a health check, not an error
-    assert "--walkers 3 raised to 8" in stdout
+    # raised to the least the model allows: its size depends on the terms auto chose
+    assert re.search(r"--walkers 3 raised to \d+: emcee needs more than twice", stdout)

@@ -4,6 +4,7 @@ sessions against their published values (imu_tk's Xsens MTi, imucal's Ferraris s
 command line's JSON, and bad input."""
 
 import csv
+import dataclasses
 import json
 from pathlib import Path
 
@@ -157,7 +158,8 @@ def pair_angles(sensitivity):
 
 
 def test_xsens_session_agrees_with_the_datasheet(shared_data):
-    """imu_tk's own test session: raw counts of an Xsens MTi, 41 still poses at 100 Hz, with
+    """imu_tk's own test session: raw counts of an Xsens MTi, 41 still poses at 100 Hz (the
+    Bayesian fit on 12 of them, a hand-held session of the size people record), with
     the values the imu_tk authors took from the datasheet (SOURCE.txt), at imu_tk's gravity.
     The datasheet is a factory calibration of another day and temperature, printed as
     integers and two decimals: the tolerances below are that rounding and the sensor's
@@ -165,9 +167,16 @@ def test_xsens_session_agrees_with_the_datasheet(shared_data):
     data = np.loadtxt(shared_data / "imu_tk_xsens" / "xsens_acc.mat")
     assert np.median(np.diff(data[:, 0])) == pytest.approx(0.01, abs=1e-4)
     gravity = bc.LocalGravity(9.81744, 0.0, "imu_tk's test application")
-    calibration = bc.calibrate_multi_position(data[:, 1:], 100.0, gravity=gravity, unit="LSB")
+    calibration = bc.calibrate_multi_position(
+        data[:, 1:], 100.0, gravity=gravity, unit="LSB", bayesian=False
+    )
     assert calibration.poses.n == 41
-    classical, fit = calibration.classical, calibration.bayesian
+    classical = calibration.classical
+    # The Bayesian fit on a hand-held session of 12 poses (the third to the fourteenth, in 9
+    # orientations): it converges and agrees with the datasheet as the 41 poses do.
+    poses = calibration.poses
+    session = bc.Poses(*(np.asarray(field)[2:14] for field in dataclasses.astuple(poses)))
+    fit = bc.calibrate_multi_position(session, gravity=gravity, unit="LSB", seed=1).bayesian
     assert fit.diagnostics.passed, fit.diagnostics.failures
     datasheet_sensitivity = np.array([415, 413, 415])  # counts per m/s^2, integers
     datasheet_misalignment = np.array([[1, 0, -0.01], [0.01, 1, 0.01], [0.02, 0.01, 1]])
@@ -473,3 +482,18 @@ def test_a_failed_health_check_exits_1(run_cli, tmp_path, monkeypatch):
     assert "HEALTH CHECK FAILED" in stderr and "R-hat of scale_x" in stderr
     assert "posterior checks FAILED" in stdout
     assert json.loads(output.read_text())["bayesian"]["diagnostics"]["passed"] is False
+
+
+def test_a_hand_held_session_too_short_for_the_minimum_lists_its_poses(run_cli, shared_data):
+    """Poses held for less than --min-still: the error lists the poses found and offers the
+    shorter minimum that finds enough (exit 2, nothing written)."""
+    code, _, stderr = run_cli(
+        "multi-position",
+        shared_data / "imu_tk_xsens" / "xsens_acc.mat",
+        "--channels", "x,y,z", "--names", "t,x,y,z", "--time-column", "t", "--unit", "LSB",
+        "--g-local", "9.81744", "--classical-only", "--min-still", "9",
+    )  # fmt: skip
+    assert code == 2, stderr
+    assert "found 9 still pose(s)" in stderr
+    assert "93.1-102.4 s (+y)" in stderr
+    assert "--min-still 1.5 finds 42 poses in 14 orientations" in stderr

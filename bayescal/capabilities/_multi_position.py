@@ -17,7 +17,10 @@ from ..classical._multi_position import (
     Poses,
     check_unit,
     classical_multi_position,
+    describe_poses,
+    distinct_orientations,
     find_poses,
+    pose_shortfall,
 )
 from ..inference._mcmc import (
     Diagnostics,
@@ -165,6 +168,9 @@ def calibrate_multi_position(
     sections : list of (start, stop), optional
         The still poses in seconds from ``start_s`` (default: found, each still for at least
         ``min_still_s``).
+    min_still_s : float
+        The shortest stillness (s) that counts as a pose when the poses are found; too few
+        found poses are listed in the error, with a shorter minimum that finds enough.
     confidence : float
         Confidence of the classical half-widths.
     bayesian : bool
@@ -196,6 +202,8 @@ def calibrate_multi_position(
             else f"still sections of at least {min_still_s:g} s found in the record"
         )
     check_unit(poses, unit)
+    if not isinstance(values, Poses) and sections is None:
+        _check_found_enough(values, rate_hz, poses, start_s, unit, orientations, min_still_s)
     classical = classical_multi_position(
         poses, gravity, orientations=orientations, confidence=confidence
     )
@@ -205,6 +213,36 @@ def calibrate_multi_position(
         else None
     )
     return MultiPositionCalibration(unit, rate_hz, poses, found_by, classical, posterior)
+
+
+SHORTER_STILL_S = (1.5, 1.0, 0.5)
+"""The shorter minimum stillness (s) offered when too few poses are found: a pose held by
+hand is often still for only a second or so."""
+
+
+def _check_found_enough(values, rate_hz, poses, start_s, unit, orientations, min_still_s):
+    """Too few poses found: say which were found, and the longest shorter minimum stillness
+    (``--min-still``) that finds enough, when one does."""
+    shortfall = pose_shortfall(poses, orientations)
+    if shortfall is None:
+        return
+    problem, fix = shortfall
+    for shorter in (s for s in SHORTER_STILL_S if s < min_still_s):
+        try:
+            found = _poses(values, rate_hz, None, start_s, unit, shorter)
+        except InputError:
+            continue
+        if pose_shortfall(found, orientations) is None:
+            fix = (
+                f"--min-still {shorter:g} finds {found.n} poses in "
+                f"{distinct_orientations(found)} orientations; or {fix}"
+            )
+            break
+    raise InputError(
+        f"{problem}; the poses found (still for at least {min_still_s:g} s): "
+        f"{describe_poses(poses)}",
+        fix=fix,
+    )
 
 
 def _poses(values, rate_hz, sections, start_s, unit, min_still_s) -> Poses:

@@ -272,6 +272,62 @@ def assign_faces(poses: Poses) -> tuple[np.ndarray, tuple[str, ...]]:
     return faces, labels
 
 
+def pose_shortfall(poses: Poses, orientations: str) -> tuple[str, str] | None:
+    """Why ``poses`` are too few for the ``orientations`` model, and what to do: (problem,
+    fix), or None when they are enough. Six-face needs six poses; free needs
+    MIN_FREE_POSES poses in MIN_FREE_ORIENTATIONS distinct orientations."""
+    if orientations == "six-face":
+        if poses.n >= 6:
+            return None
+        return (
+            f"found {poses.n} still pose(s); a six-face calibration needs all six",
+            "hold the sensor still on each face for a few seconds, or give the poses with "
+            "--sections",
+        )
+    if poses.n < MIN_FREE_POSES:
+        return (
+            f"found {poses.n} still pose(s); the free model needs at least {MIN_FREE_POSES} "
+            "(9 parameters from gravity's magnitude alone)",
+            "record more poses in different orientations (12 or more, spread over the "
+            "sphere), or, for a six-face session, pass --orientations six-face",
+        )
+    distinct = distinct_orientations(poses)
+    if distinct < MIN_FREE_ORIENTATIONS:
+        return (
+            f"{poses.n} still poses but only {distinct} distinct orientations (poses within "
+            f"{SAME_ORIENTATION_DEG:g} deg count once); the free model needs at least "
+            f"{MIN_FREE_ORIENTATIONS}",
+            "record more poses in different orientations, or, for a six-face session, pass "
+            "--orientations six-face",
+        )
+    return None
+
+
+def describe_poses(poses: Poses) -> str:
+    """The poses in words, one per pose: when, and which way gravity points in the sensor's
+    axes (its rough direction), e.g. ``12.5-20.1 s (+z)``, or its number where the poses
+    were given without times."""
+    directions = _rough_directions(poses.mean)
+    words = []
+    for index, direction in enumerate(directions):
+        axis = int(np.argmax(np.abs(direction)))
+        sign = "+" if direction[axis] > 0 else "-"
+        when = (
+            f"{poses.start_s[index]:.1f}-{poses.stop_s[index]:.1f} s"
+            if np.isfinite(poses.start_s[index])
+            else f"pose {index + 1}"
+        )
+        words.append(f"{when} ({sign}{AXES[axis]})")
+    return ", ".join(words)
+
+
+def _check_enough(poses: Poses, orientations: str) -> None:
+    shortfall = pose_shortfall(poses, orientations)
+    if shortfall is not None:
+        problem, fix = shortfall
+        raise InputError(problem, fix=fix)
+
+
 def _when(poses: Poses, index: int) -> str:
     if np.isnan(poses.start_s[index]):
         return "given as samples"
@@ -457,31 +513,12 @@ def classical_multi_position(
     g = gravity.value
     distinct = distinct_orientations(poses)
     if six_face:
-        if poses.n < 6:
-            raise InputError(
-                f"found {poses.n} still pose(s); a six-face calibration needs all six",
-                fix="hold the sensor still on each face for a few seconds, or give the poses "
-                "with --sections",
-            )
+        _check_enough(poses, orientations)
         faces, labels = assign_faces(poses)
         start = _linear_six_face(poses.mean, faces, g)
         names, dof = SIX_FACE_PARAMETERS, 3 * poses.n - 12
     else:
-        if poses.n < MIN_FREE_POSES:
-            raise InputError(
-                f"found {poses.n} still pose(s); the free model needs at least "
-                f"{MIN_FREE_POSES} (9 parameters from gravity's magnitude alone)",
-                fix="record more poses in different orientations (12 or more, spread over the "
-                "sphere), or, for a six-face session, pass --orientations six-face",
-            )
-        if distinct < MIN_FREE_ORIENTATIONS:
-            raise InputError(
-                f"{poses.n} still poses but only {distinct} distinct orientations (poses within "
-                f"{SAME_ORIENTATION_DEG:g} deg count once); the free model needs at least "
-                f"{MIN_FREE_ORIENTATIONS}",
-                fix="record more poses in different orientations, or, for a six-face session, "
-                "pass --orientations six-face",
-            )
+        _check_enough(poses, orientations)
         faces, labels = None, None
         start = _quadric_estimate(poses.mean, g)
         names, dof = FREE_PARAMETERS, poses.n - 9

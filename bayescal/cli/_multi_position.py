@@ -4,6 +4,7 @@ from many still poses."""
 import math
 
 from .._errors import InputError
+from ..recording._sections import MIN_DURATION_S as MIN_STILL_S
 from ._arguments import (
     add_recording_arguments,
     confidence,
@@ -14,6 +15,7 @@ from ._arguments import (
     height,
     latitude,
     load,
+    positive_float,
     progress,
     seed,
 )
@@ -33,6 +35,14 @@ def add_parser(commands) -> None:
         "--sections",
         metavar="T0:T1,...",
         help="the still poses in seconds from the first sample (default: found)",
+    )
+    parser.add_argument(
+        "--min-still",
+        type=positive_float,
+        default=MIN_STILL_S,
+        metavar="SECONDS",
+        help=f"the shortest stillness that counts as a pose when the poses are found "
+        f"(default {MIN_STILL_S:g} s; a hand-held session may need 1)",
     )
     parser.add_argument(
         "--orientations",
@@ -119,6 +129,7 @@ def run(args) -> int:
             unit=first.unit,
             orientations=args.orientations,
             sections=sections,
+            min_still_s=args.min_still,
             start_s=first.start_s,
             confidence=args.confidence,
             bayesian=not args.classical_only,

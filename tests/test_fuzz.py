@@ -3,13 +3,15 @@ calibration files ends in exit 0 (with the right answer where the change cannot 
 1 (a health check) or 2 (one line that says what is wrong, and no file left behind) — never
 in exit 3, never with a traceback.
 
-Hypothesis draws the cases, derandomized (the same cases on every run) and bounded, on
+Hypothesis draws the cases, derandomized (the same cases on every run) and bounded (unless a
+longer sweep is asked for, :data:`SWEEP`), on
 recordings short enough that no command reaches its sampler: a recording under 33 rows is
 refused by every Bayesian path, so the generated cases test reading and checking, fast.
 """
 
 import contextlib
 import json
+import os
 import tempfile
 from pathlib import Path
 
@@ -20,8 +22,11 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
+SWEEP = int(os.environ.get("BAYESCAL_FUZZ_SWEEP", "0"))
+"""0 in the suite (derandomized, bounded); N > 0 a longer sweep: N times the cases, drawn at
+random (``BAYESCAL_FUZZ_SWEEP=10 python -m pytest tests/test_fuzz.py``)."""
 FUZZ = settings(
-    derandomize=True,
+    derandomize=not SWEEP,
     database=None,
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
@@ -188,7 +193,7 @@ COMMANDS = {
 }  # fmt: skip
 
 
-@settings(FUZZ, max_examples=120)
+@settings(FUZZ, max_examples=120 * max(SWEEP, 1))
 @given(data=mutated_text(), command=st.sampled_from(sorted(COMMANDS)))
 def test_malformed_recordings(run_cli, data, command):
     folder, out = _workspace()
@@ -198,7 +203,7 @@ def test_malformed_recordings(run_cli, data, command):
     _check(*run_cli(*argv), out, argv)
 
 
-@settings(FUZZ, max_examples=40)
+@settings(FUZZ, max_examples=40 * max(SWEEP, 1))
 @given(data=mutated_text(base=SHORT), command=st.sampled_from(["report", "thermal fit", "noise"]))
 def test_malformed_short_recordings_on_the_bayesian_paths(run_cli, data, command):
     """No case here may reach a sampler: a short recording is refused before it."""
@@ -226,7 +231,7 @@ def test_malformed_short_recordings_on_the_bayesian_paths(run_cli, data, command
 NEUTRAL = ["semicolon", "tab", "crlf", "bom", "comments", "quotes", "reorder"]
 
 
-@settings(FUZZ, max_examples=25)
+@settings(FUZZ, max_examples=25 * max(SWEEP, 1))
 @given(changes=st.lists(st.sampled_from(NEUTRAL), min_size=1, max_size=3, unique=True))
 def test_layouts_that_cannot_change_the_answer(run_cli, changes):
     folder, out = _workspace()
@@ -279,7 +284,7 @@ OPTIONS = {
 }
 
 
-@settings(FUZZ, max_examples=80)
+@settings(FUZZ, max_examples=80 * max(SWEEP, 1))
 @given(
     options=st.dictionaries(
         st.sampled_from(sorted(OPTIONS)), st.integers(0, 20), min_size=1, max_size=4
@@ -357,7 +362,7 @@ def calibration_files(draw):
     return json.dumps(document).encode()
 
 
-@settings(FUZZ, max_examples=90)
+@settings(FUZZ, max_examples=90 * max(SWEEP, 1))
 @given(data=calibration_files(), step=st.sampled_from(["compensate", "update"]))
 def test_malformed_calibration_files(run_cli, data, step):
     folder, out = _workspace()

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 
-from bayescal._noise_model import increment_spectrum_shapes
+from bayescal.models._components import increment_spectrum_shapes
 
 FLOOR = math.sqrt(2 * math.log(2) / math.pi)
 PARAMETERS = ("N", "B", "K")

@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 
 import bayescal as bc
-from bayescal._classical import slope_readings
-from bayescal._noise_fit import fit_noise, parse_terms
-from bayescal._units import display_values, noise_parameter_unit
+from bayescal.classical._noise import slope_readings
+from bayescal.models._terms import parse_terms
+from bayescal.recording._units import display_values
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 CHANNELS = (
@@ -91,28 +91,23 @@ def main() -> None:
         for index, (channel, unit) in enumerate(CHANNELS):
             values = data[:, index]
             start = time.perf_counter()
-            allan = bc.allan_deviation(values, RATE)
-            fit = fit_noise(values, RATE, allan, terms=terms, seed=run)
+            fit = bc.fit_noise(values, RATE, terms=terms, unit=unit, channel=channel, seed=run)
             elapsed = time.perf_counter() - start
             parts = []
             for name in ("N", "B", "K", "Q", "R"):
                 if name not in fit.parameters:
                     continue
-                summary = fit.parameters[name]
-                display = display_values(name, summary.mean, unit)
+                summary = fit.summary[name]
+                display = display_values(name, summary["mean"], unit)
                 label, factor = (
-                    next(iter(display.items()))
-                    if display
-                    else (noise_parameter_unit(name, unit), summary.mean)
+                    next(iter(display.items())) if display else (summary["unit"], summary["mean"])
                 )
-                ratio = factor / summary.mean
+                ratio = factor / summary["mean"]
                 parts.append(
-                    f"{name} {summary.mean * ratio:.3g} [{summary.q05 * ratio:.3g}, "
-                    f"{summary.q95 * ratio:.3g}] {label}"
+                    f"{name} {summary['mean'] * ratio:.3g} [{summary['q05'] * ratio:.3g}, "
+                    f"{summary['q95'] * ratio:.3g}] {label}"
                 )
-            checks = (
-                "ok" if fit.diagnostics.passed else "FAILED " + "; ".join(fit.diagnostics.failures)
-            )
+            checks = "ok" if fit.passed else "FAILED " + "; ".join(fit.failures)
             print(
                 f"  run {run} {channel:<7} "
                 + "; ".join(parts)

@@ -37,7 +37,13 @@ def main() -> None:
             "python -c 'import numpy'": [sys.executable, "-c", "import numpy"],
             "bayescal --help": [*cli, "--help"],
             "bayescal sensors": [*cli, "sensors"],
-            "bad input: no such file": [*cli, "noise", str(Path(folder) / "no.csv"), "--channel", "x"],
+            "bad input: no such file": [
+                *cli,
+                "noise",
+                str(Path(folder) / "no.csv"),
+                "--channel",
+                "x",
+            ],
             "bad input: no such column": [*cli, "noise", str(recording), "--channel", "gyro_q"],
         }
         timings = {name: best_of(command, args.runs) for name, command in cases.items()}

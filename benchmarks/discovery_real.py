@@ -20,11 +20,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from bayescal._discover import DiscoveryData, discover, effect_parameters, sample_final
-from bayescal._pad import find_pad_window
-from bayescal._recording import load_table, prepare_channel
+import bayescal as bc
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 
@@ -39,13 +35,13 @@ def mpu6050():
     for axis, name in enumerate(("gyro_x", "gyro_y", "gyro_z"), start=1):
         yield (
             "MPU-6050 set-2 10 min",
-            DiscoveryData(
-                values=gyro[:, axis],
-                rate_hz=float(rate),
-                channel=name,
-                unit="deg/s",
-                temperature=on_gyro,
-            ),
+            {
+                "y": gyro[:, axis],
+                "rate_hz": float(rate),
+                "channel": name,
+                "unit": "deg/s",
+                "temperature": on_gyro,
+            },
         )
 
 
@@ -57,25 +53,22 @@ def adis_smac():
         column = 0 if axis == 0 else 2
         yield (
             "ADIS16405 SMAC imu1, first hour",
-            DiscoveryData(
-                values=counts["imu1_counts"][:hour, column] * scale,
-                rate_hz=rate,
-                channel=name,
-                unit="deg/s",
-            ),
+            {
+                "y": counts["imu1_counts"][:hour, column] * scale,
+                "rate_hz": rate,
+                "channel": name,
+                "unit": "deg/s",
+            },
         )
 
 
 def adis_pad():
     path = SHARED / "psas_adis16405" / "Launch-12" / "telemetry_ADIS_decoded.csv"
-    table = load_table(path)
-    pad = find_pad_window(table)
+    recording = bc.load_recording(path)
+    pad = bc.find_pad_window(recording)
     for name in ("gyro_x_dps", "gyro_z_dps"):
-        data = prepare_channel(table, name, start=pad.start_s, stop=pad.stop_s, gaps="split")
-        yield (
-            f"ADIS16405 Launch-12 pad ({pad.stop_s - pad.start_s:.0f} s)",
-            DiscoveryData(values=data.values, rate_hz=data.rate_hz, channel=name, unit=data.unit),
-        )
+        channel = recording.channel(name, start=pad.start_s, stop=pad.stop_s, gaps="split")
+        yield f"ADIS16405 Launch-12 pad ({pad.stop_s - pad.start_s:.0f} s)", {"y": channel}
 
 
 WHITE = ("white",)
@@ -98,28 +91,28 @@ def main() -> int:
             continue
         for (label, data), baseline in itertools.product(recordings, baselines):
             started = time.perf_counter()
-            result = discover(data, baseline=baseline)
-            posterior = sample_final(result.final, data, seed=0) if result.findings else None
+            found = bc.discover(**data, baseline=baseline, seed=0)
             print(
-                f"\n  {label}, {data.channel}, baseline bias + {' + '.join(baseline)}: "
-                f"{data.values.size} samples at {data.rate_hz:.4g} Hz "
+                f"\n  {label}, {found.channel}, baseline bias + {' + '.join(baseline)}: "
+                f"{round(found.duration_s * found.rate_hz)} samples at {found.rate_hz:.4g} Hz "
                 f"({time.perf_counter() - started:.0f} s)"
             )
-            failed = [c["name"] for c in result.baseline_checks if not c["passed"]]
+            failed = [check.name for check in found.checks if not check.passed_before]
             print(f"    baseline checks failed: {', '.join(failed) or 'none'}")
-            for finding in result.findings:
-                parameters = effect_parameters(finding.name, finding, posterior, data)
+            for effect in found.effects:
                 shown = "; ".join(
                     f"{name} {value['mean']:.4g} [{value['q05']:.4g}, {value['q95']:.4g}] "
                     f"{value['unit']}"
-                    for name, value in parameters.items()
+                    for name, value in effect.parameters.items()
                     if "q05" in value
                 )
-                print(f"    + {finding.name}: log BF {finding.log_bayes_factor:.1f}; {shown}")
-            still = [c["name"] for c in result.final_checks if not c["passed"]]
+                factor = effect.evidence["log_bayes_factor"]
+                evidence = "on a grid" if factor is None else f"log BF {factor:.1f}"
+                print(f"    + {effect.name}: {evidence}; {shown}")
+            still = [check.name for check in found.checks if not check.passed_after]
             print(f"    final checks failed: {', '.join(still) or 'none'}")
-            if posterior is not None and not posterior.diagnostics.passed:
-                print(f"    POSTERIOR HEALTH: {'; '.join(posterior.diagnostics.failures)}")
+            if not found.passed:
+                print(f"    POSTERIOR HEALTH: {'; '.join(found.posterior.diagnostics.failures)}")
     return 0
 
 

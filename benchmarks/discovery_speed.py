@@ -11,36 +11,49 @@ import time
 
 import numpy as np
 
-from bayescal._discover import DiscoveryData, discover, sample_final
+import bayescal as bc
 
 RATE = 50.0
 MINUTES = 90
 
 
-def recording(seed: int) -> DiscoveryData:
+def recording(seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The gyro channel (deg/s) and its temperature (degC)."""
     rng = np.random.default_rng(seed)
     n = int(MINUTES * 60 * RATE)
     t = np.arange(n) / RATE
     temperature = 22 + 10 * -np.expm1(-t / 900) + np.sin(2 * np.pi * t / 1200)
     values = 0.05 * rng.standard_normal(n) + 0.002 * (temperature - temperature.mean())
-    return DiscoveryData(
-        values=values, rate_hz=RATE, channel="gyro_x", unit="deg/s", temperature=temperature
+    return values, temperature
+
+
+def timed_discovery(values, temperature, seed):
+    """Discovery with its final posterior, and the time at which the search ended (its last
+    progress report; the posterior is sampled after it)."""
+    stamps = []
+    result = bc.discover(
+        values,
+        RATE,
+        temperature=temperature,
+        unit="deg/s",
+        channel="gyro_x",
+        seed=seed,
+        progress=lambda _: stamps.append(time.perf_counter()),
     )
+    return result, stamps[-1]
 
 
 def main() -> None:
     for run, seed in (("first (compiles)", 1), ("second", 2)):
-        data = recording(seed)
+        values, temperature = recording(seed)
         started = time.perf_counter()
-        result = discover(data)
-        found = time.perf_counter()
-        posterior = sample_final(result.final, data, seed=seed)
+        result, found = timed_discovery(values, temperature, seed)
         done = time.perf_counter()
         print(
-            f"{run:<17} {data.values.size} samples: discovery {found - started:5.1f} s, "
+            f"{run:<17} {values.size} samples: discovery {found - started:5.1f} s, "
             f"posterior {done - found:5.1f} s, total {done - started:5.1f} s; found "
-            f"{[f.name for f in result.findings]}; posterior checks "
-            f"{'passed' if posterior.diagnostics.passed else 'FAILED'}"
+            f"{[effect.name for effect in result.effects]}; posterior checks "
+            f"{'passed' if result.passed else 'FAILED'}"
         )
 
 

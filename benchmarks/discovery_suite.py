@@ -89,7 +89,7 @@ def simulate(hidden, rng, seed):
     """The recording and the true parameters of each hidden effect."""
     import jax
 
-    from bayescal._noise_model import NoiseModel
+    import bayescal as bc
 
     rate = float(rng.choice([50.0, 100.0], p=[0.7, 0.3]))
     minutes = float(rng.choice([30, 45, 60, 90, 120], p=[0.35, 0.25, 0.2, 0.1, 0.1]))
@@ -135,8 +135,8 @@ def simulate(hidden, rng, seed):
                 truth[effect] = {"R": r}
             case "bias_instability":
                 b = rng.uniform(0.05, 0.15) * WHITE_SD
-                model = NoiseModel(rate, B=b)
-                values += np.asarray(model.simulate(jax.random.PRNGKey(seed), n))
+                model = bc.NoiseModel(rate, B=b)
+                values += model.simulate(n, seed=jax.random.PRNGKey(seed))
                 truth[effect] = {"B": b}
             case "saturation":
                 # 2.5 to 3.5 sd from the bias: 0.6 to 0.02 % of the samples clipped.
@@ -150,9 +150,9 @@ def simulate(hidden, rng, seed):
 
 def _block_noise_covariance(truth, rate, n):
     """Covariance of the 128 block means of the recording's stochastic noise, from the truth."""
-    from bayescal._discover import LEVEL_BLOCKS, _gauss_markov_block_covariance
-    from bayescal._level import block_covariance_basis
-    from bayescal._noise_model import component_weights
+    from bayescal.models._components import block_covariance_basis, component_weights
+    from bayescal.models._composite import LEVEL_BLOCKS
+    from bayescal.models.effects.gauss_markov import GaussMarkov
 
     edges = np.linspace(0, n, LEVEL_BLOCKS + 1).round().astype(np.int64)
     start, stop = edges[:-1], edges[1:]
@@ -166,8 +166,8 @@ def _block_noise_covariance(truth, rate, n):
     covariance = np.einsum("t,tij->ij", weights, block_covariance_basis(start, stop, rate))
     if "gauss_markov" in truth:
         gm = truth["gauss_markov"]
-        covariance += gm["sigma_gm"] ** 2 * _gauss_markov_block_covariance(
-            start, stop, rate, gm["time_constant"]
+        covariance += gm["sigma_gm"] ** 2 * GaussMarkov(gm["time_constant"]).block_covariance(
+            start, stop, rate
         )
     return covariance, start, stop
 
@@ -195,7 +195,7 @@ def expected_log_bayes_factors(truth, rate, n, temperature) -> dict:
     time_s = np.arange(n) / rate
     duration = n / rate
     angular = 2 * np.pi * np.arange(1, n // 2 + 1) / duration
-    from bayescal._discover import SEARCHED_VALUES
+    from bayescal.models.effects._base import SEARCHED_VALUES
 
     schwarz = 0.5 * math.log(n / 2)
     search = math.log(SEARCHED_VALUES)
@@ -257,34 +257,25 @@ def run_one(arguments):
     import jax
 
     jax.config.update("jax_enable_x64", True)
-    from bayescal._discover import (
-        AMBIGUOUS_LOG_BAYES_FACTOR,
-        DiscoveryData,
-        discover,
-        effect_parameters,
-        sample_final,
-    )
+    import bayescal as bc
 
     rng = np.random.default_rng(seed)
     values, rate, temperature, truth = simulate(hidden, rng, seed)
-    data = DiscoveryData(
-        values=values, rate_hz=rate, channel="gyro_x", unit="deg/s", temperature=temperature
-    )
     expected = expected_log_bayes_factors(truth, rate, values.size, temperature)
     start = time.perf_counter()
-    result = discover(data)
-    posterior = sample_final(result.final, data, seed=seed) if result.findings else None
+    result = bc.discover(
+        values, rate, temperature=temperature, unit="deg/s", channel="gyro_x", seed=seed
+    )
     elapsed = time.perf_counter() - start
-    found = [finding.name for finding in result.findings]
+    found = [effect.name for effect in result.effects]
     covered = {}
-    for finding in result.findings:
-        if finding.name not in truth:
+    for effect in result.effects:
+        if effect.name not in truth:
             continue
-        parameters = effect_parameters(finding.name, finding, posterior, data)
-        for name, true_value in truth[finding.name].items():
-            summary = parameters.get(name)
+        for name, true_value in truth[effect.name].items():
+            summary = effect.parameters.get(name)
             if summary and "q05" in summary:
-                covered[f"{finding.name}.{name}"] = bool(
+                covered[f"{effect.name}.{name}"] = bool(
                     summary["q05"] <= true_value <= summary["q95"]
                 )
     return {
@@ -297,14 +288,13 @@ def run_one(arguments):
         "seconds": elapsed,
         "n": values.size,
         "rate": rate,
-        "health": posterior.diagnostics.passed if posterior else True,
+        "health": result.passed,
         "indistinguishable": [
-            finding.runner_up[0]
-            for finding in result.findings
-            if finding.runner_up
-            and finding.log_bayes_factor - finding.runner_up[1] < AMBIGUOUS_LOG_BAYES_FACTOR
+            effect.evidence["indistinguishable_from"]
+            for effect in result.effects
+            if "indistinguishable_from" in effect.evidence
         ],
-        "unexplained": result.undecided[0] if result.undecided else None,
+        "unexplained": result.unexplained["best_candidate"] if result.unexplained else None,
     }
 
 

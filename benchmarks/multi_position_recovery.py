@@ -27,17 +27,11 @@ import time
 import numpy as np
 from scipy import stats
 
-from bayescal import InputError
-from bayescal._gravity import LocalGravity
-from bayescal._multi_position import (
-    FREE_PARAMETERS,
-    SIX_FACE_PARAMETERS,
-    bayesian_multi_position,
-    classical_multi_position,
-    simulate_poses,
-)
+import bayescal as bc
+from bayescal.classical._multi_position import FREE_PARAMETERS, SIX_FACE_PARAMETERS
+from bayescal.models._multi_position import simulate_poses
 
-G = LocalGravity(9.80123, 1e-5, "benchmark")
+G = bc.LocalGravity.measured(9.80123, 1e-5)
 SCALES, ANGLES, OFFSETS = [1 / 415, 1 / 413, 1 / 418], [0.004, -0.007, 0.011], [33100, 33270, 32370]
 TRUTH = {
     "free": np.array([*SCALES, *ANGLES, *OFFSETS], dtype=float),
@@ -48,8 +42,9 @@ NOISE_SD = 3.3  # counts per sample
 FACES = np.vstack([np.eye(3), -np.eye(3)])
 
 
-def session(orientations: str, seed: int, n_poses: int):
-    """Poses and their classical calibration; free pose sets the model rejects are redrawn."""
+def session(orientations: str, seed: int, n_poses: int, posterior_seed: int):
+    """The calibration of simulated poses (classical and Bayesian, the posterior drawn with
+    ``posterior_seed``); free pose sets the model rejects are redrawn."""
     rng = np.random.default_rng(seed)
     while True:
         if orientations == "six-face":
@@ -66,10 +61,15 @@ def session(orientations: str, seed: int, n_poses: int):
             noise_sd=NOISE_SD,
         )
         try:
-            return poses, classical_multi_position(
-                poses, G, orientations=orientations, confidence=0.90
+            return bc.calibrate_multi_position(
+                poses,
+                gravity=G,
+                unit="LSB",
+                orientations=orientations,
+                confidence=0.90,
+                seed=posterior_seed,
             )
-        except InputError:
+        except bc.InputError:
             continue
 
 
@@ -92,9 +92,9 @@ def main() -> None:
         z_scores, unhealthy = [], 0
         start, cpu = time.perf_counter(), time.process_time()
         for seed in range(count):
-            poses, classical = session(orientations, 1000 + seed, args.poses)
-            fit = bayesian_multi_position(poses, classical, seed=seed)
-            unhealthy += not fit.diagnostics.passed
+            calibration = session(orientations, 1000 + seed, args.poses, seed)
+            classical, fit = calibration.classical, calibration.bayesian
+            unhealthy += not calibration.passed
             for i, name in enumerate(names):
                 low, high = np.quantile(fit.draws[name], [0.05, 0.95])
                 bayes_inside[i] += low <= truth[i] <= high

@@ -14,13 +14,10 @@ drops to about 80 %; see the README.)
 import argparse
 import time
 
-import jax
-import numpy as np
 from scipy import stats
 
 import bayescal as bc
-from bayescal._noise_fit import DEFAULT_TERMS, fit_noise
-from bayescal._noise_model import NoiseModel
+from bayescal.models._terms import CLASSICAL_TERMS
 
 RATE = 10.0
 TRUTH = {"bias": 0.4, "N": 0.005, "B": 2e-3, "K": 3e-4}
@@ -32,17 +29,15 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=2**16)
     args = parser.parse_args()
 
-    model = NoiseModel(rate_hz=RATE, **TRUTH)
+    model = bc.NoiseModel(rate_hz=RATE, **TRUTH)
     names = ("N", "B", "K", "bias")
     inside = {name: 0 for name in names}
     student, unhealthy = 0, 0
     start = time.perf_counter()
     for seed in range(args.simulations):
-        values = np.asarray(model.simulate(jax.random.PRNGKey(20_000 + seed), args.samples))
-        fit = fit_noise(
-            values, RATE, bc.allan_deviation(values, RATE), terms=DEFAULT_TERMS, seed=seed
-        )
-        unhealthy += not fit.diagnostics.passed
+        values = model.simulate(args.samples, seed=20_000 + seed)
+        fit = bc.fit_noise(values, RATE, terms=CLASSICAL_TERMS, seed=seed)
+        unhealthy += not fit.passed
         for name in names:
             summary = fit.parameters[name]
             inside[name] += summary.q05 <= TRUTH[name] <= summary.q95

@@ -14,16 +14,31 @@ record) is computed for the first --posterior records.
 import argparse
 import time
 
-import jax
 import numpy as np
 from _common import PARAMETERS, allan_wls_fit, cramer_rao_bound
 
-from bayescal._classical import classical_noise
-from bayescal._noise_fit import DEFAULT_TERMS, fit_noise, noise_problem, point_estimate
-from bayescal._noise_model import NoiseModel
+import bayescal as bc
+from bayescal.inference._noise_posterior import noise_mode
+from bayescal.inference._priors import default_prior
+from bayescal.models._level import level_summary
+from bayescal.models._noise_problem import NoiseProblem
+from bayescal.models._terms import CLASSICAL_TERMS
+from bayescal.models._whittle import spectral_summary
 
 RATE = 10.0
 TRUTH = {"N": 0.005, "B": 2e-3, "K": 1e-4}
+
+
+def map_estimate(values: np.ndarray, classical: bc.ClassicalNoise) -> dict:
+    """bayescal's point estimate: the MAP of the default model, under the default prior
+    (centred on the classical Allan deviation), in the channel's units."""
+    problem = NoiseProblem(
+        spectral_summary(values, RATE),
+        level_summary(values, RATE),
+        default_prior(CLASSICAL_TERMS, classical.allan),
+    )
+    mode = noise_mode(problem)
+    return {name: float(value) for name, value in problem.natural(mode.theta).items()}
 
 
 def main() -> None:
@@ -33,7 +48,7 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=2**16)
     args = parser.parse_args()
 
-    model = NoiseModel(rate_hz=RATE, bias=0.4, **TRUTH)
+    model = bc.NoiseModel(rate_hz=RATE, bias=0.4, **TRUTH)
     estimates = {
         method: []
         for method in (
@@ -46,17 +61,16 @@ def main() -> None:
     unhealthy = 0
     start = time.perf_counter()
     for seed in range(args.simulations):
-        values = np.asarray(model.simulate(jax.random.PRNGKey(10_000 + seed), args.samples))
-        classical = classical_noise(values, RATE)
-        problem = noise_problem(values, RATE, classical.allan, terms=DEFAULT_TERMS)
-        estimate = point_estimate(problem)
-        estimates["bayescal MAP"].append([estimate.values[p] for p in PARAMETERS])
+        values = model.simulate(args.samples, seed=10_000 + seed)
+        classical = bc.classical_noise(values, RATE)
+        estimate = map_estimate(values, classical)
+        estimates["bayescal MAP"].append([estimate[p] for p in PARAMETERS])
         estimates["IEEE 952 slopes"].append([classical.slope_readings[p].value for p in PARAMETERS])
         wls = allan_wls_fit(values, RATE)
         estimates["allantools AVAR WLS"].append([wls[p] for p in PARAMETERS])
         if seed < args.posterior:
-            fit = fit_noise(values, RATE, classical.allan, terms=DEFAULT_TERMS, seed=seed)
-            unhealthy += not fit.diagnostics.passed
+            fit = bc.fit_noise(values, RATE, terms=CLASSICAL_TERMS, seed=seed)
+            unhealthy += not fit.passed
             estimates["bayescal posterior mean"].append(
                 [fit.parameters[p].mean for p in PARAMETERS]
             )

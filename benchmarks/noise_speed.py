@@ -16,13 +16,9 @@ import argparse
 import os
 import time
 
-import jax
-import numpy as np
 from _common import allan_wls_fit
 
 import bayescal as bc
-from bayescal._noise_fit import DEFAULT_TERMS, fit_noise
-from bayescal._noise_model import NoiseModel
 
 RATE = 100.0
 TRUTH = {"N": 0.005, "B": 5e-4, "K": 5e-6}
@@ -30,8 +26,7 @@ TRUTH = {"N": 0.005, "B": 5e-4, "K": 5e-6}
 
 def posterior(values):
     start = time.perf_counter()
-    allan = bc.allan_deviation(values, RATE)
-    fit = fit_noise(values, RATE, allan, terms=DEFAULT_TERMS, seed=0)
+    fit = bc.fit_noise(values, RATE, seed=0)
     return time.perf_counter() - start, fit
 
 
@@ -39,9 +34,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=2**23)
     args = parser.parse_args()
-    values = np.asarray(
-        NoiseModel(rate_hz=RATE, bias=0.3, **TRUTH).simulate(jax.random.PRNGKey(1), args.samples)
-    )
+    values = bc.NoiseModel(rate_hz=RATE, bias=0.3, **TRUTH).simulate(args.samples, seed=1)
 
     first, _ = posterior(values)
     second, fit = posterior(values)

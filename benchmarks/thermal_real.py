@@ -16,8 +16,9 @@ import h5py
 import numpy as np
 
 import bayescal as bc
-from bayescal._recording import load_table, prepare_channel
-from bayescal._thermal import ThermalRecord, choose_degree, sample_thermal, thermal_problem
+from bayescal.capabilities._thermal import choose_degree
+from bayescal.inference._priors import default_prior
+from bayescal.models._thermal import ThermalRecord
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 TERMS = ("white", "bias_instability", "rate_random_walk")
@@ -34,9 +35,11 @@ def mpu6050():
 
 def adis16405():
     for run in ("Launch-11_droptest_baseline-0", "Launch-11_droptest_baseline-1"):
-        table = load_table(SHARED / "psas_adis16405" / run / "logfile-000_ADIS_decoded.csv")
+        recording = bc.load_recording(
+            SHARED / "psas_adis16405" / run / "logfile-000_ADIS_decoded.csv"
+        )
         for name in ("gyro_x_dps", "gyro_y_dps", "gyro_z_dps"):
-            data = prepare_channel(table, name, gaps="split", temperature="temp_C")
+            data = recording.channel(name, gaps="split", temperature="temp_C")
             yield f"ADIS16405 {run[-10:]}", name, data.values, data.temperature, data.rate_hz
 
 
@@ -45,16 +48,22 @@ def main() -> None:
     for label, channel, values, temperature, rate in (*mpu6050(), *adis16405()):
         present = temperature[~np.isnan(temperature)]
         reference = float(np.round(np.mean(present), 1))
+        # The degree alone (fit_thermal(degree="auto") would also sample the chosen one).
         record = ThermalRecord(values, temperature, rate, ((0, values.size),))
-        allan = bc.allan_deviation(values, rate)
-        degree, _scores = choose_degree(record, reference, noise_terms=TERMS, allan=allan)
-        fit = sample_thermal(
-            thermal_problem(record, 1, reference, noise_terms=TERMS, allan=allan),
-            1,
-            reference,
+        prior = default_prior(TERMS, bc.allan_deviation(values, rate))
+        degree, _scores = choose_degree(record, reference, noise_prior=prior)
+        fit = bc.fit_thermal(
+            values,
+            temperature,
+            rate,
+            degree=1,
+            reference=reference,
+            terms=TERMS,
+            unit="deg/s",
+            channel=channel,
             seed=0,
         )
-        slope = fit.coefficient_draws[:, 1]
+        slope = fit.posterior.coefficient_draws[:, 1]
         low, high = np.quantile(slope, [0.05, 0.95])
         span = float(np.ptp(present))
         verdict = "no thermal slope supported" if degree == 0 else f"degree {degree} supported"
@@ -62,7 +71,7 @@ def main() -> None:
             f"  {label:<24}{channel:<11} range {span:.2f} degC; ELPD picks degree {degree} "
             f"({verdict}); linear slope {np.mean(slope):+.4f} [{low:+.4f}, {high:+.4f}]; "
             f"over the range {np.mean(slope) * span:+.4f} deg/s; checks "
-            f"{'ok' if fit.diagnostics.passed else 'FAILED'}"
+            f"{'ok' if fit.passed else 'FAILED'}"
         )
 
 

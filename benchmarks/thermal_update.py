@@ -23,8 +23,9 @@ import jax
 import numpy as np
 
 import bayescal as bc
-from bayescal._noise_model import NoiseModel
-from bayescal._thermal import ThermalRecord, sample_thermal, thermal_problem
+from bayescal.capabilities._thermal import sample_thermal
+from bayescal.inference._priors import default_prior
+from bayescal.models._thermal import ThermalRecord, thermal_problem
 
 RATE, T0 = 10.0, 35.0
 LAB = np.array([0.50, 0.0100, -2.0e-4])
@@ -39,10 +40,10 @@ def bias(coefficients, temperature):
 
 def scenario(seed):
     keys = jax.random.split(jax.random.PRNGKey(40_000 + seed), 8)
-    model = NoiseModel(rate_hz=RATE, **NOISE)
+    model = bc.NoiseModel(rate_hz=RATE, **NOISE)
     n = 18_000
     lab_temperature = 45 - 25 * np.exp(-np.arange(n) / RATE / 500)
-    lab = bias(LAB, lab_temperature) + np.asarray(model.simulate(keys[0], n))
+    lab = bias(LAB, lab_temperature) + np.asarray(model.sample(keys[0], n))
     rng = np.random.default_rng(seed)
     pieces, temperatures, periods, measured, start = [], [], [], [], 0
     for index, centre in enumerate(np.linspace(30, 36, 6)):
@@ -50,7 +51,7 @@ def scenario(seed):
         temperature = centre + 0.3 * np.sin(np.arange(m) / 150 + rng.uniform(0, 6))
         offset = rng.normal(0, 0.003)
         pieces.append(
-            bias(NOW, temperature) + offset + np.asarray(model.simulate(keys[1 + index], m))
+            bias(NOW, temperature) + offset + np.asarray(model.sample(keys[1 + index], m))
         )
         temperatures.append(temperature)
         periods.append((start, start + m))
@@ -72,51 +73,38 @@ def evaluate(mean, covariance):
 def run(seed):
     lab, field, measured = scenario(seed)
     terms = ("white", "rate_random_walk")
-    old = sample_thermal(
-        thermal_problem(lab, 2, T0, noise_terms=terms, allan=bc.allan_deviation(lab.values, RATE)),
-        2,
-        T0,
-        seed=seed,
+    old = bc.fit_thermal(
+        lab.values, lab.temperature, RATE, degree=2, reference=T0, terms=terms, seed=seed
     )
-    allan = bc.allan_deviation(field.values, RATE)
+    # The field data alone: its periods and their measured offsets, under a flat prior on the
+    # coefficients (no public function fits several periods without a prior calibration).
+    noise_prior = default_prior(terms, bc.allan_deviation(field.values, RATE))
     fresh = sample_thermal(
-        thermal_problem(field, 2, T0, noise_terms=terms, allan=allan, offset_prior=measured),
+        thermal_problem(field, 2, T0, noise_prior=noise_prior, offset_prior=measured),
         2,
         T0,
         seed=seed,
     )
-    calibrated_range = (float(lab.temperature.min()), float(lab.temperature.max()))
     updated, exact = (
-        sample_thermal(
-            thermal_problem(
-                field,
-                2,
-                T0,
-                noise_terms=terms,
-                allan=allan,
-                offset_prior=measured,
-                coefficient_prior=(old.coefficient_mean, old.coefficient_covariance),
-                drift=drift,
-                calibrated_range=calibrated_range,
-            ),
-            2,
-            T0,
+        old.update(
+            field.values,
+            field.temperature,
+            RATE,
+            periods=field.periods,
+            offsets=measured,
+            drift=drift,
             seed=seed,
         )
         for drift in ("auto", None)
     )
-    fits = {
-        "old lab calibration": old,
-        "fresh fit of field data": fresh,
-        "updated calibration": updated,
-        "updated, no drift allowed": exact,
-    }
     results = {
-        name: evaluate(fit.coefficient_mean, fit.coefficient_covariance)
-        for name, fit in fits.items()
+        "old lab calibration": evaluate(old.coefficients, old.covariance),
+        "fresh fit of field data": evaluate(fresh.coefficient_mean, fresh.coefficient_covariance),
+        "updated calibration": evaluate(updated.coefficients, updated.covariance),
+        "updated, no drift allowed": evaluate(exact.coefficients, exact.covariance),
     }
-    healthy = all(fit.diagnostics.passed for fit in fits.values())
-    return results, healthy, updated.drift[0]
+    healthy = old.passed and fresh.diagnostics.passed and updated.passed and exact.passed
+    return results, healthy, updated.drift["scale"]
 
 
 def main() -> None:

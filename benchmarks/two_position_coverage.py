@@ -12,12 +12,9 @@ Each session: 60 s up, a 10 s turn-over, 60 s down, at 100 Hz, in m/s^2; white n
 import argparse
 import time
 
-import jax
 import numpy as np
 
-from bayescal._gravity import local_gravity
-from bayescal._noise_model import NoiseModel
-from bayescal._two_position import Section, bayesian_two_position, classical_two_position
+import bayescal as bc
 
 RATE, SECTION, GAP = 100.0, 6000, 1000
 G, SCALE, OFFSET = 9.80123, 1.002, 0.05
@@ -26,10 +23,8 @@ G, SCALE, OFFSET = 9.80123, 1.002, 0.05
 def session(seed):
     """The whole session as one continuous noise record, so the random walk links the
     sections; the turn-over in between is dropped."""
-    noise = np.asarray(
-        NoiseModel(rate_hz=RATE, N=4e-4, K=2e-4).simulate(
-            jax.random.PRNGKey(30_000 + seed), 2 * SECTION + GAP
-        )
+    noise = bc.NoiseModel(rate_hz=RATE, N=4e-4, K=2e-4).simulate(
+        2 * SECTION + GAP, seed=30_000 + seed
     )
     up = OFFSET + G / SCALE + noise[:SECTION]
     down = OFFSET - G / SCALE + noise[SECTION + GAP :]
@@ -40,26 +35,27 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--simulations", type=int, default=100)
     args = parser.parse_args()
-    gravity = local_gravity(given=f"{G}±0.00001")
+    gravity = bc.LocalGravity.measured(G, 0.00001)
     truth = {"scale": SCALE, "offset": OFFSET}
     inside = {(method, name): 0 for method in ("classical", "Bayesian") for name in truth}
     unhealthy = 0
     start = time.perf_counter()
     for seed in range(args.simulations):
         up, down = session(seed)
-        classical = classical_two_position(up, down, gravity, 0.90)
-        fit = bayesian_two_position(
-            Section(up, 0.0, "up"),
-            Section(down, (SECTION + GAP) / RATE, "down"),
+        calibration = bc.calibrate_two_position(
+            bc.Section(up, 0.0, "up"),
+            bc.Section(down, (SECTION + GAP) / RATE, "down"),
             RATE,
-            gravity,
-            terms=("white", "rate_random_walk"),
+            gravity=gravity,
             gap_s=(SECTION + GAP) / RATE,
+            terms=("white", "rate_random_walk"),
+            confidence=0.90,
             seed=seed,
         )
-        unhealthy += not fit.noise.diagnostics.passed
+        fit = calibration.bayesian
+        unhealthy += not calibration.passed
         for name, value in truth.items():
-            estimate, half = classical[name]
+            estimate, half = calibration.classical[name]
             inside["classical", name] += abs(estimate - value) <= half
             low, high = np.quantile(fit.draws[name], [0.05, 0.95])
             inside["Bayesian", name] += low <= value <= high

@@ -186,7 +186,7 @@ def test_block_means_likelihood_splits_into_one_block_ahead_predictions():
     data = values + walk + 0.01 * regressor[:, 0]
     white, walk_k = WHITE_SD / math.sqrt(RATE), 2e-4
     theta = np.array([math.log(white), 0.0, math.log(walk_k), 0.0, 0.0, 0.0, 0.0])
-    noise = LevelNoise(np.array([1.0, 0, 1, 0, 0, 0, 0]), np.asarray(1.0), 0.0)
+    noise = LevelNoise(np.array([1.0, 0, 1, 0, 0, 0, 0]), np.asarray(1.0), np.asarray(0.0), 0.0)
     beta, _, predictive = level_coefficients(noise, data, regressor, RATE, theta)
     assert predictive.shape == (1, LEVEL_BLOCKS)
 

@@ -254,7 +254,7 @@ def test_kalibr_yaml_fills_one_sensor_per_run(run_cli, tmp_path, recordings):
     kept_line = next(line for line in text.splitlines() if line.startswith("# Gyroscopes:"))
     assert "kept from the file" in kept_line and "bias instability B = " in kept_line
     assert "accelerometer bias instability B =" in text
-    assert "classical" in imu["bayescal"]["accelerometer"]
+    assert "classical" in imu["bayescal"]["accelerometer"]["axes"]["acc_y"]["how"]["N"]
 
 
 def test_matlab_script_sets_the_imusensor_properties(run_cli, tmp_path, recordings):
@@ -364,3 +364,395 @@ def test_export_refusals_leave_no_file(run_cli, tmp_path, recordings):
     refused("--export", "matlab", script, fragments=["not written by bayescal"])
     assert script.read_text() == "x = 1;\n"
     assert sorted(path.name for path in tmp_path.iterdir()) == ["mine.m", "other.yaml"]
+
+
+# --- What users have: text tables as loggers write them, arrays, MATLAB files -------------
+
+
+@pytest.fixture(scope="module")
+def plain(tmp_path_factory):
+    """A 100 Hz gyro as a plain CSV, and its noise result: every other way of writing the same
+    numbers must read back to this result."""
+    folder = tmp_path_factory.mktemp("plain")
+    rng = np.random.default_rng(11)
+    time = np.arange(1500) / RATE
+    gyro = 0.4 + 0.03 * rng.standard_normal(time.size)
+    path = write_csv(folder / "plain.csv", {"time": time, "gyro_x": gyro})
+    return {"folder": folder, "time": time, "gyro": gyro, "csv": path}
+
+
+def _result(run_cli, path, tmp_path, *arguments):
+    result, stdout = _noise_json(run_cli, path, tmp_path, "--channel", "gyro_x", *arguments)
+    return _without_source(result), stdout
+
+
+def _lines(time, gyro, delimiter=","):
+    return [f"{t:.17g}{delimiter}{g:.17g}" for t, g in zip(time, gyro, strict=True)]
+
+
+@pytest.mark.parametrize(
+    ("name", "kind"),
+    [
+        ("semicolon.csv", "semicolon"),
+        ("tab.tsv", "tab"),
+        ("aligned.txt", "spaces"),
+        ("comma_decimal.csv", "decimal comma"),
+        ("comments.csv", "comments"),
+        ("crlf_bom.csv", "crlf and bom"),
+    ],
+)
+def test_text_layouts_read_as_the_plain_csv(run_cli, tmp_path, plain, name, kind):
+    time, gyro = plain["time"], plain["gyro"]
+    path = tmp_path / name
+    if kind == "semicolon":
+        path.write_text("\n".join(["time;gyro_x", *_lines(time, gyro, ";")]) + "\n")
+    elif kind == "tab":
+        path.write_text("\n".join(["time\tgyro_x", *_lines(time, gyro, "\t")]) + "\n")
+    elif kind == "spaces":
+        rows = [f"  {t:>24.17g}   {g:>24.17g}" for t, g in zip(time, gyro, strict=True)]
+        path.write_text("\n".join(["   time        gyro_x", *rows]) + "\n")
+    elif kind == "decimal comma":
+        rows = [f"{t:.17g};{g:.17g}".replace(".", ",") for t, g in zip(time, gyro, strict=True)]
+        path.write_text("\n".join(["time;gyro_x", *rows]) + "\n")
+    elif kind == "comments":
+        rows = _lines(time, gyro)
+        path.write_text("\n".join(["# logger 1.2", "# serial 7", "", "time,gyro_x", *rows]) + "\n")
+    else:
+        text = "\r\n".join(["time,gyro_x", *_lines(time, gyro)]) + "\r\n"
+        path.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    expected, _ = _result(run_cli, plain["csv"], tmp_path)
+    found, _ = _result(run_cli, path, tmp_path)
+    assert found == expected
+
+
+def test_latin1_header_iso_stamps_and_times_of_day(run_cli, tmp_path, plain):
+    time, gyro = plain["time"], plain["gyro"]
+    expected, _ = _result(run_cli, plain["csv"], tmp_path)
+    latin = tmp_path / "latin.csv"
+    body = "\n".join(["time,gyro_x[°/s]", *_lines(time, gyro)]) + "\n"
+    latin.write_bytes(body.encode("latin-1"))
+    found, stdout = _result(run_cli, latin, tmp_path)
+    assert "not UTF-8; read as Latin-1" in stdout and found["unit"] == "deg/s"
+
+    start = np.datetime64("2024-05-01T23:59:50")
+    stamps = start + np.round(time * 1e6).astype("timedelta64[us]")
+    iso = tmp_path / "iso.csv"
+    iso.write_text(
+        "\n".join(["time,gyro_x", *(f"{s},{g:.17g}" for s, g in zip(stamps, gyro, strict=True))])
+        + "\n"
+    )
+    found, stdout = _result(run_cli, iso, tmp_path)
+    assert "read as dates and times" in stdout
+    assert found["rate_hz"] == expected["rate_hz"] and found["n_samples"] == time.size
+    assert found["classical"]["bias"] == expected["classical"]["bias"]
+
+    clock = tmp_path / "clock.csv"  # times of day that pass midnight
+    days = [str(s).split("T")[1] for s in stamps]
+    clock.write_text(
+        "\n".join(["t,gyro_x", *(f"{d},{g:.17g}" for d, g in zip(days, gyro, strict=True))])
+    )
+    found, stdout = _result(run_cli, clock, tmp_path)
+    assert "read as times of day" in stdout and found["rate_hz"] == RATE
+
+
+def test_logger_preamble_needs_skip_rows(run_cli, tmp_path, plain):
+    path = tmp_path / "logger.csv"
+    rows = _lines(plain["time"], plain["gyro"])
+    path.write_text("\n".join(["Logger v1.2", "serial 0042", "time,gyro_x", *rows]) + "\n")
+    code, stdout, stderr = run_cli("noise", path, "--channel", "gyro_x", "--classical-only")
+    assert code == 2 and stdout == ""
+    assert "the first 2 line(s)" in stderr and "'Logger v1.2'" in stderr
+    assert "pass --skip-rows 2" in stderr
+    expected, _ = _result(run_cli, plain["csv"], tmp_path)
+    found, _ = _result(run_cli, path, tmp_path, "--skip-rows", "2")
+    assert found == expected
+
+
+def test_headerless_table_named_by_names(run_cli, tmp_path, plain):
+    path = tmp_path / "bare.csv"
+    path.write_text("\n".join(_lines(plain["time"], plain["gyro"])) + "\n")
+    code, _, stderr = run_cli("noise", path, "--channel", "gyro_x", "--classical-only")
+    assert code == 2 and "columns are: column_0, column_1" in stderr
+    expected, _ = _result(run_cli, plain["csv"], tmp_path)
+    found, _ = _result(run_cli, path, tmp_path, "--names", "time,gyro_x")
+    assert found == expected
+    code, _, stderr = run_cli("noise", path, "--names", "a,b,c", "--channel", "a")
+    assert code == 2 and "--names gives 3 name(s) for a table of 2 columns" in stderr
+
+
+def test_placeholder_first_row_of_zeros_is_left_out(run_cli, tmp_path, plain):
+    time, gyro = plain["time"], plain["gyro"]
+    path = write_csv(
+        tmp_path / "zeros.csv",
+        {"time": np.concatenate(([0.0], time + 5.0)), "gyro_x": np.concatenate(([0.0], gyro))},
+    )
+    expected, _ = _result(run_cli, plain["csv"], tmp_path)
+    found, stdout = _result(run_cli, path, tmp_path)
+    assert "data row 1 holds 0 in every column" in stdout and "left out" in stdout
+    assert found["classical"] == expected["classical"]
+    # Row numbers in messages still count the file's rows.
+    broken = gyro.copy()
+    broken[99] = np.nan
+    path = write_csv(
+        tmp_path / "zeros_nan.csv",
+        {"time": np.concatenate(([0.0], time + 5.0)), "gyro_x": np.concatenate(([0.0], broken))},
+    )
+    code, _, stderr = run_cli("noise", path, "--channel", "gyro_x", "--classical-only")
+    assert code == 2 and "data row 101" in stderr
+
+
+def test_npy_and_nd_npz_with_chosen_axes(run_cli, tmp_path, plain):
+    time, gyro = plain["time"], plain["gyro"]
+    expected, _ = _result(run_cli, plain["csv"], tmp_path)
+    table = np.column_stack([time, gyro, 2 * gyro])
+    np.save(tmp_path / "imu.npy", table)
+    found, _ = _result(run_cli, tmp_path / "imu.npy", tmp_path, "--names", "time,gyro_x,other")
+    assert found == expected
+    code, _, stderr = run_cli(
+        "noise", tmp_path / "imu.npy", "--channel", "imu_1", "--rate", "100", "--classical-only"
+    )
+    assert code == 0, stderr
+
+    # recordings x axes x samples, as a study keeps several runs of a 3-axis gyro.
+    runs = np.stack([np.stack([gyro + k, gyro - k, gyro * (k + 1)]) for k in range(3)])
+    np.savez(tmp_path / "runs.npz", data=runs, rate=np.float64(100.0))
+    names = ["--names", "gyro_x,gyro_y,gyro_z", "--rate", "100"]
+    code, _, stderr = run_cli("noise", tmp_path / "runs.npz", *names, "--channel", "gyro_x")
+    assert code == 2 and "gyro_x_rec0" in stderr  # the columns the array gives
+    found, _ = _noise_json(
+        run_cli, tmp_path / "runs.npz", tmp_path, *names, "--channel", "gyro_y_rec2"
+    )
+    assert found["classical"]["bias"]["value"] == pytest.approx(np.mean(gyro) - 2, rel=1e-12)
+    # The same data stored samples x records x axes, axes named explicitly.
+    np.savez(tmp_path / "moved.npz", data=np.moveaxis(runs, 2, 0))
+    found, _ = _noise_json(
+        run_cli,
+        tmp_path / "moved.npz",
+        tmp_path,
+        "--samples-axis",
+        "0",
+        "--channels-axis",
+        "2",
+        *names,
+        "--channel",
+        "gyro_y_rec2",
+    )
+    assert found["classical"]["bias"]["value"] == pytest.approx(np.mean(gyro) - 2, rel=1e-12)
+    square = np.zeros((40, 40))
+    np.savez(tmp_path / "square.npz", data=square)
+    code, _, stderr = run_cli("noise", tmp_path / "square.npz", "--channel", "data_0")
+    assert code == 2 and "pass --samples-axis" in stderr
+
+
+def test_mat_v5_struct_scalars_and_text(run_cli, tmp_path, plain):
+    from scipy import io as scipy_io
+
+    time, gyro = plain["time"], plain["gyro"]
+    path = tmp_path / "session.mat"
+    scipy_io.savemat(
+        path,
+        {
+            "imu": {"t": time[:, None], "gyro": np.column_stack([gyro, -gyro])},
+            "rate": 100.0,
+            "operator": "A. N. Other",
+            "rotation": np.eye(3),
+        },
+    )
+    expected, _ = _result(run_cli, plain["csv"], tmp_path)
+    found, _ = _result(
+        run_cli,
+        path,
+        tmp_path,
+        "--names",
+        "imu.gyro:gyro_x,gyro_y",
+        "--time-column",
+        "imu.t",
+        "--time-unit",
+        "s",
+    )
+    assert found == expected
+    for column, problem in (("rate", "is a single number"), ("operator", "holds text")):
+        code, _, stderr = run_cli("noise", path, "--channel", column, "--rate", "100")
+        assert code == 2 and problem in stderr, stderr
+    code, _, stderr = run_cli("noise", path, "--channel", "rotation", "--rate", "100")
+    assert code == 2 and "has at most 3 samples where the recording has 1500" in stderr
+
+
+def test_mat_v73_mpu6050_real(run_cli, tmp_path, shared_data):
+    """MATLAB v7.3 (HDF5) from sunsided/sensor-fusion: gyroBuffer is [t, x, y, z] x n in
+    MATLAB's view; its stamps come in bursts, so the rate is given."""
+    import h5py
+
+    folder = shared_data / "sunsided_mpu6050/data/set-2/unmoved-with-x-pointing-forward"
+    path = folder / "mpu6050_gyroscope.mat"
+    with h5py.File(path) as handle:
+        truth = handle["gyroBuffer"][()].T
+    names = ["--names", "t,gyro_x[deg/s],gyro_y[deg/s],gyro_z[deg/s]"]
+    code, _, stderr = run_cli("noise", path, *names, "--channel", "gyro_x", "--classical-only")
+    assert code == 2 and "irregular sampling" in stderr and "their mean rate is 99." in stderr
+    found, _ = _noise_json(run_cli, path, tmp_path, *names, "--channel", "gyro_x", "--rate", "99.3")
+    assert found["n_samples"] == truth.shape[0] and found["unit"] == "deg/s"
+    assert found["classical"]["bias"]["value"] == pytest.approx(truth[:, 1].mean(), rel=1e-12)
+    assert found["classical"]["bias"]["value"] == pytest.approx(4.531, abs=0.01)  # SOURCE.txt
+
+
+def test_text_mat_of_raw_counts_real(run_cli, tmp_path, shared_data):
+    """imu_tk's xsens_gyro.mat is text (t and three ADC counts, no header): read as a table;
+    counts taken for deg/s are refused, --scale makes them a rate."""
+    path = shared_data / "imu_tk_xsens/xsens_gyro.mat"
+    truth = np.loadtxt(path)
+    quiet = ["--stop", "45", "--classical-only"]
+    code, _, stderr = run_cli(
+        "noise", path, "--names", "t,gyro_x,gyro_y,gyro_z", "--channel", "gyro_x", *quiet
+    )
+    assert code == 2 and "reads 327" in stderr and "raw counts?" in stderr
+    assert "--scale" in stderr and "--unit LSB" in stderr
+    names = ["--names", "t,gyro_x,gyro_y,gyro_z", "--channel", "gyro_x", *quiet]
+    found, stdout = _noise_json(
+        run_cli, path, tmp_path, *names, "--scale", "1/6258", "--unit", "rad/s"
+    )
+    window = truth[truth[:, 0] - truth[0, 0] < 45]
+    assert found["classical"]["bias"]["value"] == pytest.approx(
+        window[:, 1].mean() / 6258, rel=1e-9
+    )
+    assert "the .mat file is text" in stdout and "multiplied by 0.000159795" in stdout
+    assert "counts with an offset" in stdout
+
+
+def test_counts_npz_scaled_by_factor_or_sensor_card(run_cli, tmp_path, shared_data):
+    """The ADIS16405 counts (int16) of the SMAC recordings: --scale 0.05 and the card's
+    resolution give deg/s; the accelerometer's card resolution gives mg."""
+    path = shared_data / "smac_imudata_adis16405/adis_16405_imu1-6_counts.npz"
+    with np.load(path) as archive:
+        counts = archive["imu1_counts"][:20_000].astype(float)
+    small = tmp_path / "counts.npz"
+    np.savez(small, imu1_counts=counts.astype(np.int16), fs_hz=np.float64(100))
+    names = ["--names", "imu1_counts:gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z", "--rate", "100"]
+    by_factor, _ = _noise_json(
+        run_cli,
+        small,
+        tmp_path,
+        *names,
+        "--channel",
+        "gyro_y",
+        "--scale",
+        "0.05",
+        "--unit",
+        "deg/s",
+    )
+    by_card, _ = _noise_json(
+        run_cli, small, tmp_path, *names, "--channel", "gyro_y", "--scale", "ADIS16405"
+    )
+    assert by_card["unit"] == "deg/s"
+    assert by_card["classical"] == by_factor["classical"]
+    assert by_factor["classical"]["bias"]["value"] == pytest.approx(
+        0.05 * counts[:, 1].mean(), rel=1e-12
+    )
+    accel, _ = _noise_json(
+        run_cli,
+        small,
+        tmp_path,
+        *names,
+        "--channel",
+        "acc_z",
+        "--scale",
+        "ADIS16405",
+        "--unit",
+        "g",
+    )
+    assert accel["unit"] == "g"
+    assert accel["classical"]["bias"]["value"] == pytest.approx(-1.016, abs=0.002)  # SOURCE.txt
+    code, _, stderr = run_cli("noise", small, *names, "--channel", "gyro_y", "--scale", "nope")
+    assert code == 2 and "no such sensor card" in stderr
+
+
+def _kalibr_run(run_cli, path, channel, target, *extra):
+    code, stdout, stderr = run_cli(
+        "noise",
+        path,
+        "--channel",
+        channel,
+        "--classical-only",
+        "--export",
+        "kalibr",
+        target,
+        *extra,
+    )
+    assert code == 0, stderr
+    return stdout
+
+
+def test_kalibr_keeps_every_axis_of_a_sensor(run_cli, tmp_path, recordings):
+    """gyro_x then gyro_z into one imu.yaml: one entry per sensor covering both, the largest
+    (default) or the RMS of the axes, each axis kept in bayescal's notes; re-running an axis
+    replaces it."""
+    csv, imu_yaml = recordings["csv"], tmp_path / "imu.yaml"
+    per_axis = {}
+    for channel in ("gyro_x", "gyro_z"):
+        result, _ = _noise_json(run_cli, csv, tmp_path, "--channel", channel)
+        to_si = 1.0 if channel == "gyro_x" else np.pi / 180
+        per_axis[channel] = {p: _classical_si(result, p, to_si) for p in ("N", "K")}
+    _kalibr_run(run_cli, csv, "gyro_x", imu_yaml)
+    stdout = _kalibr_run(run_cli, csv, "gyro_z", imu_yaml)
+    assert "axes gyro_x kept beside gyro_z" in stdout
+    imu = yaml.safe_load(imu_yaml.read_text())
+    for parameter, key in (("N", "noise_density"), ("K", "random_walk")):
+        largest = max(per_axis[c][parameter] for c in per_axis)
+        assert imu[f"gyroscope_{key}"] == pytest.approx(largest, rel=1e-8)
+    axes = imu["bayescal"]["gyroscope"]["axes"]
+    assert (
+        set(axes) == {"gyro_x", "gyro_z"} and imu["bayescal"]["gyroscope"]["combined"] == "largest"
+    )
+    assert "2 axes, each value below the largest of them" in imu_yaml.read_text()
+
+    _kalibr_run(run_cli, csv, "gyro_x", imu_yaml, "--export-axes", "rms")
+    imu = yaml.safe_load(imu_yaml.read_text())
+    rms = np.sqrt(np.mean([per_axis[c]["N"] ** 2 for c in per_axis]))
+    assert imu["gyroscope_noise_density"] == pytest.approx(rms, rel=1e-8)
+    assert set(imu["bayescal"]["gyroscope"]["axes"]) == {"gyro_x", "gyro_z"}
+
+
+def test_kalibr_export_waits_for_the_lock_and_reads_the_file_again(run_cli, tmp_path, recordings):
+    """Two runs exporting to one imu.yaml take turns: a run waits for the lock beside the
+    file, then reads the file as the other run left it (here, the accelerometer entries
+    written while it waited) and adds its own."""
+    import fcntl
+    import threading
+
+    csv, imu_yaml = recordings["csv"], tmp_path / "imu.yaml"
+    _kalibr_run(run_cli, csv, "acc_y", tmp_path / "accel.yaml")
+    finished = threading.Event()
+    with open(tmp_path / ".imu.yaml.lock", "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        worker = threading.Thread(
+            target=lambda: (_kalibr_run(run_cli, csv, "gyro_x", imu_yaml), finished.set())
+        )
+        worker.start()
+        assert not finished.wait(3.0)  # blocked on the lock
+        imu_yaml.write_text((tmp_path / "accel.yaml").read_text())  # the other run's output
+    worker.join(60)
+    assert finished.is_set()
+    imu = yaml.safe_load(imu_yaml.read_text())
+    assert "accelerometer_noise_density" in imu and "gyroscope_noise_density" in imu
+
+
+def test_spreadsheet_and_logger_quirks(run_cli, tmp_path, plain):
+    """Excel's sep=; line, UTF-16 text, a last line cut short by a logger, a time column in
+    hours: each reads as the plain CSV."""
+    time, gyro = plain["time"], plain["gyro"]
+    expected, _ = _result(run_cli, plain["csv"], tmp_path)
+    rows = _lines(time, gyro, ";")
+    excel = tmp_path / "excel.csv"
+    excel.write_text("\n".join(["sep=;", "time;gyro_x", *rows]) + "\n")
+    assert _result(run_cli, excel, tmp_path)[0] == expected
+    unicode = tmp_path / "unicode.txt"
+    unicode.write_bytes("\n".join(["time\tgyro_x", *_lines(time, gyro, "\t")]).encode("utf-16"))
+    assert _result(run_cli, unicode, tmp_path)[0] == expected
+    cut = tmp_path / "cut.csv"
+    cut.write_text("\n".join(["time,gyro_x", *_lines(time, gyro), "15.0"]))
+    found, stdout = _result(run_cli, cut, tmp_path)
+    assert "the last line ('15.0') is cut short" in stdout
+    assert found["classical"] == expected["classical"]
+    hours = write_csv(tmp_path / "hours.csv", {"time[h]": time / 3600, "gyro_x": gyro})
+    found, _ = _result(run_cli, hours, tmp_path)
+    assert found["rate_hz"] == RATE and found["classical"] == expected["classical"]

@@ -38,7 +38,7 @@ warm-up only what decays from power-on, a random walk what is spread over the sp
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 
 import equinox as eqx
@@ -49,10 +49,11 @@ from scipy import stats
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import HealthCheckError, InputError
 from ..classical._allan import allan_deviation
-from ..inference._checks import line_search, run_checks
+from ..inference._checks import CHECK_LEVEL, line_search, run_checks
 from ..inference._mcmc import batch_log_density, diagnose, sample_ensemble, summarize, walker_count
 from ..inference._optimize import maximum_a_posteriori
-from ..inference._priors import allan_reference_scales
+from ..inference._priors import allan_reference_scales, default_prior
+from ..inference._selection import select_noise_terms
 from ..models._composite import (
     MAX_REGRESSORS,
     NOISE_SLOTS,
@@ -70,18 +71,29 @@ from ..models._composite import (
     profile,
     profiled_log_posterior,
     regressor_columns,
+    shaped,
     slot_prior,
     slot_variances,
     slow_columns,
+    summary_components,
 )
+from ..models._level import level_summary
 from ..models._noise_model import parameter_unit
-from ..models._terms import BASELINE_TERMS
+from ..models._terms import (
+    BASELINE_TERMS,
+    CANDIDATE_TERMS,
+    FILTER_SHAPE_OF_TERM,
+    LOWPASS_PARAMETERS,
+    PARAMETERS_OF_TERM,
+)
 from ..models._whittle import spectral_summary, whittle_log_likelihood
 from ..models.effects._base import GRID_POINTS, PARABOLIC_STEPS, Effect, SlotTerm
-from ..models.effects._catalogue import SEARCHED
-from ..models.effects.gauss_markov import GaussMarkov
+from ..models.effects._catalogue import CATALOGUE, SEARCHED
 from ..models.effects.outliers import Outliers, outlier_scan, without_outliers
+from ..models.effects.output_filter import OutputFilter
+from ..models.effects.quantization import Quantization
 from ..models.effects.saturation import Saturation, impute_clipped, saturation_scan
+from ..recording._levels import discrete_step
 
 DECISIVE_LOG_BAYES_FACTOR = math.log(100.0)
 """Jeffreys' "decisive": odds of 100 to 1."""
@@ -149,6 +161,10 @@ class Context:
         self.clean = clean
         """``unclipped`` with the outliers replaced (itself when there are none)."""
         self.summaries = {}
+        self.lsb = discrete_step(clean)
+        """The grid the samples sit on (zero: none): its rounding floor is in every model."""
+        self.lowpass = None
+        """The output filter decided before the search (:func:`decide_output_filter`)."""
         """Spectral summaries already computed, by the parts of a spec they depend on, and
         the time constants found by earlier searches."""
 
@@ -200,16 +216,17 @@ def fit_model(context: "Context", spec: ModelSpec) -> ModelFit:
     n_regressors = len(spec.regressor_names())
     key = spec.summary_key()
     if key not in context.summaries:
-        context.summaries[key] = padded(
+        summary = padded(
             spectral_summary(
                 values,
                 data.rate_hz,
                 regressors=regressors[:, : max(n_regressors, 1)],
-                extra_components=(
-                    partial(GaussMarkov(time_constant).autocovariance, rate_hz=data.rate_hz),
-                ),
+                extra_components=summary_components(data.rate_hz, time_constant),
             )
         )
+        if context.lowpass is not None:
+            summary = shaped(summary, context.lowpass.gain(summary.node_frequency, data.rate_hz))
+        context.summaries[key] = summary
     summary = context.summaries[key]
     location, scale, mask = slot_prior(spec, context.prior_scales)
     regressor_mask = (np.arange(MAX_REGRESSORS) < n_regressors).astype(float)
@@ -220,6 +237,7 @@ def fit_model(context: "Context", spec: ModelSpec) -> ModelFit:
         mask,
         regressor_mask,
         np.asarray(10.0 * context.prior_scales["R"]),
+        np.asarray(context.lsb**2 / (12.0 * data.rate_hz)),
     )
     lowered = design.location - 3.0 * design.mask * np.array([1, 1, 1, 1, 1, 0, 0])
     mode = maximum_a_posteriori(profiled_log_posterior, design, (design.location, lowered))
@@ -230,7 +248,7 @@ def fit_model(context: "Context", spec: ModelSpec) -> ModelFit:
     slow = slow_columns(spec)
     fast = np.setdiff1d(np.arange(n_regressors), slow)
     level_beta, level_covariance, level_pointwise = level_coefficients(
-        LevelNoise(mask, design.ramp_scale, spec.gauss_markov_s),
+        LevelNoise(mask, design.ramp_scale, design.floor, spec.gauss_markov_s),
         values - regressors[:, fast] @ beta[fast],
         regressors[:, slow],
         data.rate_hz,
@@ -240,7 +258,9 @@ def fit_model(context: "Context", spec: ModelSpec) -> ModelFit:
         beta[slow] = level_beta[0]
         covariance[np.ix_(slow, slow)] = level_covariance[0]
         pointwise = whittle_log_likelihood(
-            summary, *slot_variances(jnp.asarray(theta), mask, design.ramp_scale), beta
+            summary,
+            *slot_variances(jnp.asarray(theta), mask, design.ramp_scale, design.floor),
+            beta,
         )
     pointwise = np.concatenate(
         (
@@ -272,6 +292,8 @@ def fit_model(context: "Context", spec: ModelSpec) -> ModelFit:
         clean=values,
         design=design,
         hessian=np.asarray(hessian),
+        lowpass=context.lowpass,
+        lsb=context.lsb,
     )
 
 
@@ -466,6 +488,18 @@ def search_effects(
                     {},
                 )
             )
+    if context.lsb > 0:
+        findings.append(_grid_finding(context, current))
+    if _high_band_deficit(baseline_checks, data.rate_hz) and not current.spec.has("output_filter"):
+        decided = decide_output_filter(context, baseline)
+        if decided is not None:
+            effect, log_bayes_factor, record = decided
+            context.lowpass = effect
+            context.summaries.clear()  # every model from here on sees the filter
+            fit = fit_model(context, current.spec)
+            gain, gain_se = _elpd_difference(fit, current)
+            findings.append(Finding(effect, fit, log_bayes_factor, gain, gain_se, (), record))
+            current = fit
     checks = baseline_checks if not findings else run_checks(current, data)
     undecided = ()
     for _ in range(max_effects):
@@ -507,6 +541,78 @@ def search_effects(
         undecided=undecided,
         saturation=saturation,
     )
+
+
+def _grid_finding(context: Context, current: ModelFit) -> Finding:
+    """``quantization`` named from the samples: they all sit on a grid of levels, which no
+    continuous noise does (the evidence is the samples themselves: no Bayes factor to
+    compute). Its rounding is a known white floor in every model of the search."""
+    levels = np.unique(context.clean[np.isfinite(context.clean)]).size
+    record = {"lsb": context.lsb, "levels": int(levels)}
+    return Finding(Quantization(lsb=context.lsb), current, math.inf, 0.0, 0.0, (), record)
+
+
+def _high_band_deficit(checks: list[dict], rate_hz: float) -> bool:
+    """Whether the spectrum check failed with less power than the model near Nyquist: the
+    signature of an output filter (a low-pass takes power away, only at high frequency)."""
+    (spectrum,) = [check for check in checks if check["name"] == "spectrum_bands"]
+    bands = spectrum["bands"]
+    return not spectrum["passed"] and any(
+        band["frequency_hz"][0] >= HIGH_FREQUENCY_FRACTION * rate_hz
+        and band["power_over_model"] < 1
+        and band["p_value"] * len(bands) < CHECK_LEVEL
+        for band in bands
+    )
+
+
+def decide_output_filter(context: Context, baseline: tuple[str, ...]):
+    """The sensor's output filter, when the baseline's spectrum misfits: the shape (one-tap,
+    decimation, Butterworth) the record holds decisive evidence for, chosen by Laplace
+    evidence among every stationary term (:func:`select_noise_terms`), with its MAP
+    parameters and their Laplace 90 % intervals; None when no shape is decisive. Its
+    shape is then fixed for the search (its uncertainty is second order for the effects that
+    follow)."""
+    data = context.data
+    values = context.clean
+    allan = allan_deviation(values, data.rate_hz, "octave")
+    selection = select_noise_terms(
+        spectral_summary(values, data.rate_hz),
+        level_summary(values, data.rate_hz),
+        partial(default_prior, allan=allan),
+        lsb=context.lsb,
+        # Every stationary term competes: power a low-pass seems to take away near Nyquist
+        # is often power a slow term added at low frequency, pulling the white level up.
+        candidates=CANDIDATE_TERMS,
+        base=tuple(term for term in baseline if term in PARAMETERS_OF_TERM),
+    )
+    chosen = [term for term in selection.terms if term in FILTER_SHAPE_OF_TERM]
+    if not chosen:
+        return None
+    shape = FILTER_SHAPE_OF_TERM[chosen[0]]
+    estimates = selection.estimates
+    names = ("F",) if shape == "one_tap" else LOWPASS_PARAMETERS[shape]
+    fields = {
+        "F": "coefficient",
+        "filter_length": "length",
+        "filter_stages": "stages",
+        "filter_cutoff": "cutoff_hz",
+        "filter_order": "order",
+        "filter_warping": "warping",
+    }
+    effect = OutputFilter(shape=shape, **{fields[name]: estimates[name][0] for name in names})
+    parameters = {"shape": {"value": shape}}
+    for name in names:
+        value, sd = estimates[name]
+        parameters[name] = {
+            "mean": value,
+            "sd": sd,
+            "q05": value + stats.norm.ppf(0.05) * sd,
+            "q95": value + stats.norm.ppf(0.95) * sd,
+            "unit": parameter_unit(name, data.unit),
+        }
+    trial = next(trial for trial in selection.trials if trial.term == chosen[0])
+    record = {"parameters": parameters, "shapes": selection.table}
+    return effect, trial.log_bayes_factor, record
 
 
 class FinalPosterior(eqx.Module):
@@ -558,7 +664,9 @@ def sample_final(fit: ModelFit, data: DiscoveryData, *, seed: int = 0) -> FinalP
     if slow.size:
         regressors, _, _ = regressor_columns(fit.spec, data)
         level_beta, level_covariance, _ = level_coefficients(
-            LevelNoise(fit.design.mask, fit.design.ramp_scale, fit.spec.gauss_markov_s),
+            LevelNoise(
+                fit.design.mask, fit.design.ramp_scale, fit.design.floor, fit.spec.gauss_markov_s
+            ),
             fit.clean,
             regressors[:, slow],
             data.rate_hz,
@@ -779,13 +887,24 @@ def _evidence(finding: Finding, result: SearchResult, failed_before, after) -> t
     if finding.runner_up:
         runner, runner_score = finding.runner_up
         evidence["runner_up"] = {"name": runner, "log_bayes_factor": runner_score}
-        if finding.log_bayes_factor - runner_score < AMBIGUOUS_LOG_BAYES_FACTOR:
+        look_alike = CATALOGUE[runner].band == effect.band
+        if look_alike and finding.log_bayes_factor - runner_score < AMBIGUOUS_LOG_BAYES_FACTOR:
             evidence["indistinguishable_from"] = runner
             explanation += (
                 f" On this recording it cannot be told from {runner} (log Bayes factor "
                 f"{finding.log_bayes_factor - runner_score:.1f} between them, below log 10): "
                 "both explain the mismatch; a longer recording would decide."
             )
+    if isinstance(effect, Quantization) and effect.lsb > 0:
+        evidence["log_bayes_factor"] = None  # the samples themselves: no continuous noise
+        evidence["grid"] = {
+            "lsb": effect.lsb,
+            "unit": result.data.unit,
+            "levels": finding.search["levels"],
+            "samples": int(np.count_nonzero(np.isfinite(result.data.values))),
+        }
+    if isinstance(effect, OutputFilter):
+        evidence["shapes"] = finding.search["shapes"]
     if isinstance(effect, Outliers) and result.outliers:
         evidence["fraction"] = result.outliers["fraction"]
         evidence["flagged_samples"] = int(result.outliers["flagged"].sum())
@@ -803,6 +922,78 @@ def _evidence(finding: Finding, result: SearchResult, failed_before, after) -> t
     return evidence, explanation
 
 
+_ADVICE = {
+    "high": "the mismatch lies toward Nyquist, where the sensor's output filter, its rounding "
+    "and aliasing from a faster internal rate shape the spectrum, and no shape of the "
+    "catalogue explains it decisively — check the part's configured bandwidth and output "
+    "rate; a record with the filter bypassed or at the internal rate tells the shapes apart "
+    "(a longer record does not)",
+    "line": "a line that no single sinusoid explains decisively (one that wanders in "
+    "frequency or several close lines) — a longer record resolves close lines; a vibration "
+    "source nearby shows in every axis",
+    "low": "the recording holds too little evidence to name it — record longer, or with more "
+    "of what the term needs (a wider temperature swing, a start from power-on)",
+}
+"""What to do about a mismatch no term explains, by the band it was located in."""
+HIGH_FREQUENCY_FRACTION = 0.125
+"""A mismatch above this fraction of the sample rate (or at averaging times below its
+inverse) lies where the sensor's output filter and rounding act."""
+
+
+def _located_band(checks: list[dict], failing: list[str], rate_hz: float) -> tuple[str, str]:
+    """The band the failing checks located the mismatch in, and where, in words: a spectral
+    line; high frequency (spectrum bands or Allan deviation only near Nyquist); else low."""
+    located = {check["name"]: check["location"] for check in checks if check["name"] in failing}
+    if "spectral_line" in located:
+        return "line", f"a line at {located['spectral_line']['frequency_hz']:.6g} Hz"
+    high = (
+        [
+            f"{low:.3g}-{top:.3g} Hz"
+            for low, top in [located["spectrum_bands"]["frequency_hz"]]
+            if low >= HIGH_FREQUENCY_FRACTION * rate_hz
+        ]
+        if "spectrum_bands" in located
+        else []
+    )
+    allan = located.get("allan_deviation", {})
+    longest = max(allan.get("tau_range_s", [allan.get("tau_s", 0.0)]))
+    slow = set(located) - {"spectrum_bands", "allan_deviation"}
+    if high and not slow and longest <= 1.0 / (HIGH_FREQUENCY_FRACTION * rate_hz):
+        return "high", f"located at {high[0]}"
+    where = []
+    if "spectrum_bands" in located:
+        low, top = located["spectrum_bands"]["frequency_hz"]
+        where.append(f"spectrum {low:.3g}-{top:.3g} Hz")
+    if allan:
+        where.append(f"Allan deviation at tau = {allan['tau_s']:.3g} s")
+    return "low", ", ".join(where) or "in the slow residual"
+
+
+def _merged(effects: list[FoundEffect]) -> list[FoundEffect]:
+    """One entry per catalogue name: the grid and the white angle noise Q beyond it are both
+    ``quantization``, reported apart within one entry (the grid's LSB and rounding, then Q
+    with the evidence the spectrum gave it)."""
+    merged: dict[str, FoundEffect] = {}
+    for effect in effects:
+        first = merged.get(effect.name)
+        if first is None:
+            merged[effect.name] = effect
+            continue
+        evidence = dict(first.evidence)
+        evidence["white_angle_noise"] = {
+            "log_bayes_factor": effect.evidence["log_bayes_factor"],
+            "decisive_above": effect.evidence["decisive_above"],
+        }
+        merged[effect.name] = replace(
+            first,
+            parameters={**first.parameters, **effect.parameters},
+            evidence=evidence,
+            delta_elpd=first.delta_elpd + effect.delta_elpd,
+            delta_elpd_se=math.hypot(first.delta_elpd_se, effect.delta_elpd_se),
+        )
+    return list(merged.values())
+
+
 def describe(result: SearchResult, posterior: FinalPosterior | None) -> Discovery:
     """The public result of a search and its final posterior."""
     after = {check["name"]: check for check in result.final_checks}
@@ -816,7 +1007,7 @@ def describe(result: SearchResult, posterior: FinalPosterior | None) -> Discover
                 name=finding.name,
                 explanation=explanation,
                 parameters=finding.effect.describe(finding, posterior, result.context)
-                if posterior
+                if posterior or finding.effect.decided_before_search
                 else {},
                 evidence=evidence,
                 location=finding.effect.location(finding, baseline_checks),
@@ -824,6 +1015,7 @@ def describe(result: SearchResult, posterior: FinalPosterior | None) -> Discover
                 delta_elpd_se=finding.delta_elpd_se,
             )
         )
+    effects = _merged(effects)
     checks = []
     for check in result.baseline_checks:
         final = after.get(check["name"]) if result.findings else None
@@ -846,17 +1038,21 @@ def describe(result: SearchResult, posterior: FinalPosterior | None) -> Discover
     unexplained = None
     if still_failing and result.undecided:
         name, score = result.undecided
+        band, where = _located_band(result.final_checks, still_failing, result.data.rate_hz)
         unexplained = {
             "checks": still_failing,
+            "band": band,
+            "where": where,
             "best_candidate": name,
             "log_bayes_factor": score,
             "decisive_above": DECISIVE_LOG_BAYES_FACTOR,
-            "explanation": f"a mismatch remains ({', '.join(still_failing)}); the term that "
-            f"would explain it best, {name}, is not decisive (log Bayes factor {score:.1f}): "
-            "the recording holds too little evidence to name it — record longer, or with more "
-            "of what the term needs (a wider temperature swing, a start from power-on).",
+            "explanation": f"a mismatch remains ({', '.join(still_failing)}; {where}); the "
+            f"term that would explain it best, {name}, is not decisive (log Bayes factor "
+            f"{score:.1f}): {_ADVICE[band]}",
         }
     data = result.data
+    # The grid's rounding and the output filter are in every model without being its terms.
+    spec_terms = result.final.spec.terms()
     return Discovery(
         channel=data.channel,
         unit=data.unit,
@@ -865,7 +1061,7 @@ def describe(result: SearchResult, posterior: FinalPosterior | None) -> Discover
         baseline=("bias", *result.baseline.spec.noise),
         effects=tuple(effects),
         checks=tuple(checks),
-        final_terms=tuple(result.final.spec.terms()),
+        final_terms=tuple(dict.fromkeys((*spec_terms, *(f.name for f in result.findings)))),
         unexplained=unexplained,
         posterior=posterior,
         result=result,

@@ -1,32 +1,39 @@
 """The noise of one static channel: the classical numbers (:mod:`bayescal.classical._noise`)
 and, beside them, the posterior of the noise model (:mod:`bayescal.inference._noise_posterior`)."""
 
+import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, partial
 
 import numpy as np
 
 from .._errors import HealthCheckError, InputError
 from ..classical._noise import ClassicalNoise, classical_noise
+from ..inference._checks import posterior_checks
 from ..inference._noise_posterior import NoisePosterior, sample_noise
 from ..inference._priors import card_prior, default_prior
+from ..inference._selection import TermSelection, select_noise_terms
 from ..models._level import level_summary
 from ..models._noise_model import parameter_unit
 from ..models._noise_problem import NoiseProblem
-from ..models._terms import DEFAULT_TERMS, parse_terms
+from ..models._terms import AUTO, CANDIDATE_TERMS, DEFAULT_TERMS, check_terms, parse_terms
 from ..models._whittle import spectral_summary
+from ..recording._levels import discrete_step
 from ..recording._sensor_cards import SensorCard, find_card
 
 
 @dataclass(frozen=True)
 class NoiseFit:
     """The noise of one static channel: the classical block beside the posterior of the
-    noise model (:func:`fit_noise`).
+    noise model (:func:`fit_noise`), and whether that model fits the record.
 
     ``posterior`` is the ArviZ DataTree of the draws (its ``posterior`` group has one variable
     per parameter: ``bias``, ``N``, ``B``, ``K``, ``Q``, ``R``, ``F`` as fitted, each with its
     unit); :attr:`summary` gives mean, sd, 5 % and 95 % quantiles, the MAP and its Laplace sd
-    with units; :meth:`check` raises when the posterior failed its checks.
+    with units; :attr:`checks` are the model's checks against the record (a posterior of a
+    model that does not fit is not healthy, whatever its sampler says); :meth:`check` raises
+    when the sampler's checks or the fit's failed.
     """
 
     channel: str
@@ -36,12 +43,29 @@ class NoiseFit:
     """Student-t bias, sd, Allan deviation with intervals, IEEE 952 readings."""
     fit: NoisePosterior = field(repr=False)
     """The posterior itself (draws, diagnostics, the likelihood's data)."""
+    checks: tuple = ()
+    """The checks of the fitted model against the record (Allan deviation, spectrum in octave
+    bands, lag-1 autocorrelation: :func:`~bayescal.inference._checks.noise_model_checks`),
+    each with its place, p-value and whether it passed."""
+    selection: TermSelection | None = None
+    """How the terms were chosen (``terms="auto"``): every candidate with its Bayes factor
+    and why it was kept or left out; None for terms given."""
+    lsb: float = 0.0
+    """The resolution the samples sit on (zero: none found), channel unit: its rounding error,
+    LSB^2 / 12 per sample, is a known white floor in the model, so N is the sensor's white
+    noise without it (:attr:`output_white_level` adds it back)."""
     source: str = "<array>"
     notes: tuple[str, ...] = ()
 
     @property
     def terms(self) -> tuple[str, ...]:
         return self.fit.terms
+
+    @property
+    def output_white_level(self) -> float:
+        """The white level of the output, rounding included: sqrt(N^2 + LSB^2 / (12 fs)) at
+        the posterior mean of N, unit/√Hz — what the Allan curve reads at short tau."""
+        return math.sqrt(self.fit.parameters["N"].mean ** 2 + self.lsb**2 / (12 * self.rate_hz))
 
     @property
     def parameters(self) -> dict:
@@ -60,14 +84,25 @@ class NoiseFit:
         return self.fit.diagnostics
 
     @property
+    def fits(self) -> bool:
+        """Whether the model fits the record: every check of :attr:`checks` passed."""
+        return all(check["passed"] for check in self.checks)
+
+    @property
+    def misfits(self) -> tuple[str, ...]:
+        """Where the model does not fit the record, and by how much."""
+        return tuple(check["misfit"] for check in self.checks if not check["passed"])
+
+    @property
     def passed(self) -> bool:
-        """Whether the posterior passed its checks (R-hat, ESS, autocorrelation, acceptance,
-        a converged MAP)."""
-        return bool(self.fit.diagnostics.passed)
+        """Whether the posterior passed its sampler checks (R-hat, ESS, autocorrelation,
+        acceptance, a converged MAP) and the model fits the record."""
+        return bool(self.fit.diagnostics.passed) and self.fits
 
     @property
     def failures(self) -> tuple[str, ...]:
-        return self.fit.diagnostics.failures
+        """The failed sampler checks, then the misfits."""
+        return (*self.fit.diagnostics.failures, *(f"model misfit: {m}" for m in self.misfits))
 
     @property
     def summary(self) -> dict:
@@ -125,13 +160,54 @@ def _as_channel(y, rate_hz, unit, channel):
     return values, float(rate_hz), unit or "unit", channel, "<array>", ()
 
 
-def noise_prior(terms, classical: ClassicalNoise, unit: str, sensor: SensorCard | str | None):
-    """The prior of the noise parameters: the weakly informative default, or a sensor card's
-    datasheet figures where it gives them."""
+def noise_priors(
+    terms, classical: ClassicalNoise, unit: str, sensor: SensorCard | str | None, fallback: bool
+) -> tuple[Callable, tuple[str, ...]]:
+    """terms -> the prior of a model with those terms (the weakly informative default, or a
+    sensor card's datasheet figures where it gives them), and the notes to pass on. The card
+    is checked against ``terms`` (every candidate, for ``auto``): with ``fallback``, a card
+    that says nothing of them gives way to the default, with a note; else InputError."""
     if sensor is None:
-        return default_prior(terms, classical.allan)
+        return partial(default_prior, allan=classical.allan), ()
     card = find_card(sensor) if isinstance(sensor, str) else sensor
-    return card_prior(card, terms, unit, classical.allan)
+    try:
+        card_prior(card, terms, unit, classical.allan)
+    except InputError as error:
+        if not fallback:
+            raise
+        note = f"sensor card not used as prior: {error.problem}"
+        return partial(default_prior, allan=classical.allan), (note,)
+    return partial(card_prior, card, unit=unit, allan=classical.allan, require=False), ()
+
+
+def noise_posterior(
+    values: np.ndarray,
+    rate_hz: float,
+    *,
+    terms,
+    prior_of: Callable,
+    level_values: np.ndarray | None = None,
+    seed: int = 0,
+    n_walkers: int = 32,
+    max_steps: int = 40_000,
+    progress: bool = False,
+) -> tuple[NoisePosterior, TermSelection | None, float]:
+    """The posterior of the noise model of ``values`` (NaN: a gap), with its terms chosen by
+    evidence when ``terms`` is ``"auto"`` and the grid the samples sit on (its rounding a known
+    floor): (posterior, selection or None, LSB). ``level_values`` are the samples whose level
+    the bias is (``values`` by default): what a calibration's static sections give."""
+    lsb = discrete_step(values)
+    spectral = spectral_summary(values, rate_hz)
+    level = level_summary(values if level_values is None else level_values, rate_hz)
+    selection = None
+    if terms == AUTO:
+        selection = select_noise_terms(spectral, level, prior_of, lsb=lsb)
+        terms = selection.terms
+    problem = NoiseProblem(spectral, level, prior_of(terms), lsb=np.asarray(lsb))
+    fit = sample_noise(
+        problem, terms=terms, seed=seed, n_walkers=n_walkers, max_steps=max_steps, progress=progress
+    )
+    return fit, selection, lsb
 
 
 def fit_noise(
@@ -160,8 +236,14 @@ def fit_noise(
     rate_hz : float
         Sample rate, Hz (from the channel when ``y`` is one).
     terms : str or tuple of str
-        Noise terms beside the bias: white, bias_instability, rate_random_walk, quantization,
-        rate_ramp, output_filter (aliases such as ``rrw`` and ``all`` as on the command line).
+        ``"auto"`` (the default): white noise and every candidate term the record holds
+        decisive evidence for — bias instability, rate random walk, rate ramp, white angle
+        noise (quantization) and the output filter in one of its shapes (one-tap, decimation,
+        Butterworth) — chosen as :func:`~bayescal.inference.select_noise_terms` describes
+        and reported in :attr:`NoiseFit.selection`. Or the terms themselves: white,
+        bias_instability, rate_random_walk, quantization, rate_ramp, output_filter,
+        decimation_filter, butterworth_filter (aliases such as ``rrw`` and ``all`` as on the
+        command line).
     sensor : str or SensorCard, optional
         A sensor card (``bayescal sensors``) whose datasheet figures become priors.
     seed : int
@@ -200,23 +282,24 @@ def fit_noise(
     'deg/s/sqrt(Hz)'
     """
     values, rate_hz, unit, channel, source, notes = _as_channel(y, rate_hz, unit, channel)
-    terms = parse_terms(terms) if isinstance(terms, str) else tuple(terms)
+    terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
     try:
         classical = classical_noise(values, rate_hz, confidence=confidence, taus=taus)
     except InputError as error:
         if source == "<array>":
             raise
         raise InputError(error.problem, source=source, column=channel, fix=error.fix) from None
-    try:
-        prior = noise_prior(terms, classical, unit, sensor)
-    except InputError as error:
-        if not sensor_fallback:
-            raise
-        prior = default_prior(terms, classical.allan)
-        notes = (*notes, f"sensor card not used as prior: {error.problem}")
-    problem = NoiseProblem(spectral_summary(values, rate_hz), level_summary(values, rate_hz), prior)
-    fit = sample_noise(
-        problem, terms=terms, seed=seed, n_walkers=n_walkers, max_steps=max_steps, progress=progress
+    family = ("white", *CANDIDATE_TERMS) if terms == AUTO else terms
+    prior_of, prior_notes = noise_priors(family, classical, unit, sensor, sensor_fallback)
+    fit, selection, lsb = noise_posterior(
+        values,
+        rate_hz,
+        terms=terms,
+        prior_of=prior_of,
+        seed=seed,
+        n_walkers=n_walkers,
+        max_steps=max_steps,
+        progress=progress,
     )
     return NoiseFit(
         channel=channel,
@@ -224,6 +307,9 @@ def fit_noise(
         rate_hz=rate_hz,
         classical=classical,
         fit=fit,
+        checks=tuple(posterior_checks(fit, values, unit)),
+        selection=selection,
+        lsb=lsb,
         source=source,
-        notes=tuple(notes),
+        notes=(*notes, *prior_notes),
     )

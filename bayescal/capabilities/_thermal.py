@@ -7,8 +7,10 @@ bias(T) = sum_j c_j (T - T0)^j beside the channel's noise (the model of
 its unit, the temperature unit, T0, the degree, the coefficients with their units and
 covariance (a multivariate normal: what :meth:`ThermalCalibration.update` takes as its prior),
 the temperature range the data covered, the noise model, the Earth rate taken off (if any),
-and the provenance of every step. A file of another schema version, or for another unit, is
-refused.
+and the provenance of every step. A file of another schema version, with a field missing or
+malformed (checked field by field: finite numbers, sizes that match the degree, a symmetric
+positive semi-definite covariance), or made for another channel, unit or temperature unit, is
+refused (:func:`load_thermal_calibration`).
 
 :meth:`ThermalCalibration.update` takes the calibration as the prior of the coefficients *plus
 a drift since then*: ``drift="auto"`` (default) learns its scale from the alignment data, a
@@ -39,7 +41,7 @@ from ..inference._optimize import maximum_a_posteriori
 from ..inference._priors import default_prior
 from ..models._noise_model import parameter_unit
 from ..models._noise_problem import NoisePrior
-from ..models._terms import parse_terms
+from ..models._terms import AUTO, check_terms, parse_terms
 from ..models._thermal import (
     MAX_DEGREE,
     ThermalProblem,
@@ -52,6 +54,7 @@ from ..models._thermal import (
     thermal_problem,
 )
 from ..models.effects.earth_rotation import earth_rate_on_axis
+from ..recording._units import parse_unit
 
 SCHEMA = "bayescal.thermal_calibration"
 SCHEMA_VERSION = 1
@@ -460,21 +463,11 @@ class ThermalCalibration:
 
     @classmethod
     def from_document(cls, document: dict, source: str = "<document>") -> "ThermalCalibration":
-        """A calibration from its file's content, checked (:func:`load_thermal_calibration`)."""
-        if not isinstance(document, dict) or document.get("schema") != SCHEMA:
-            found = document.get("schema") if isinstance(document, dict) else type(document)
-            raise InputError(
-                f"not a bayescal thermal calibration (schema {found!r})",
-                source=source,
-                fix="give a file written by bayescal thermal fit",
-            )
-        if document.get("schema_version") != SCHEMA_VERSION:
-            raise InputError(
-                f"calibration schema version {document.get('schema_version')!r}; this "
-                f"bayescal reads version {SCHEMA_VERSION}",
-                source=source,
-                fix="refit with this version (bayescal thermal fit)",
-            )
+        """A calibration from its file's content, checked field by field against the schema
+        (:func:`load_thermal_calibration`); a field that is missing, of the wrong type, not
+        finite, of the wrong size, or a covariance that is not symmetric positive
+        semi-definite raises :class:`InputError` naming it."""
+        _check_document(document, source)
         return cls(
             channel=document["channel"],
             unit=document["unit"],
@@ -487,11 +480,162 @@ class ThermalCalibration:
             noise=document["noise"],
             earth_rate=document.get("earth_rate"),
             provenance=tuple(document["provenance"]),
-            bayesian=document.get("bayesian", {}),
+            bayesian=document.get("bayesian") or {},
             classical=document.get("classical"),
             offsets=document.get("offsets"),
             drift=document.get("drift"),
         )
+
+
+_FIX = "give a file written by bayescal thermal fit (or repair that field)"
+
+
+def _field_error(source: str, name: str, problem: str) -> InputError:
+    return InputError(f"field '{name}' {problem}", source=source, fix=_FIX)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _finite_number(document: dict, name: str, source: str) -> float:
+    value = document[name]
+    if not _is_number(value) or not math.isfinite(value):
+        raise _field_error(source, name, f"must be a finite number, not {value!r}")
+    return float(value)
+
+
+def _numbers(value, shape: tuple[int, ...], name: str, source: str) -> np.ndarray:
+    """``value`` as a finite float array of ``shape``, or an error naming the field."""
+
+    def numbers_only(item) -> bool:
+        if isinstance(item, list):
+            return all(numbers_only(element) for element in item)
+        return _is_number(item)
+
+    if not numbers_only(value):
+        raise _field_error(source, name, f"must hold numbers only, not {value!r:.60}")
+    try:
+        array = np.asarray(value, dtype=float)
+    except ValueError:  # ragged rows
+        array = np.zeros(0)
+    if array.shape != shape:
+        raise _field_error(
+            source, name, f"must hold {' x '.join(map(str, shape))} numbers, not {value!r:.60}"
+        )
+    if not np.all(np.isfinite(array)):
+        raise _field_error(source, name, "holds a value that is not finite (NaN or inf)")
+    return array
+
+
+def _check_noise(noise, source: str) -> None:
+    if not isinstance(noise, dict):
+        raise _field_error(source, "noise", "must be an object")
+    terms = noise.get("terms")
+    if not isinstance(terms, list) or not all(isinstance(term, str) for term in terms):
+        raise _field_error(source, "noise.terms", "must be a list of noise term names")
+    for name in ("Q", "N", "F", "B", "K"):
+        if name not in noise:
+            continue
+        entry = noise[name]
+        if not isinstance(entry, dict):
+            raise _field_error(source, f"noise.{name}", "must be an object with mean, q05, q95")
+        for key in ("mean", "q05", "q95"):
+            value = entry.get(key)
+            if not _is_number(value) or not math.isfinite(value):
+                raise _field_error(
+                    source, f"noise.{name}.{key}", f"must be a finite number, not {value!r}"
+                )
+            inside = -1 < value < 1 if name == "F" else value > 0
+            if not inside:
+                what = "lie between -1 and 1" if name == "F" else "be positive"
+                raise _field_error(source, f"noise.{name}.{key}", f"must {what}, not {value!r}")
+        if not entry["q05"] <= entry["q95"]:
+            raise _field_error(source, f"noise.{name}", "has q05 above q95")
+
+
+def _check_document(document, source: str) -> None:
+    """The schema of a calibration file, field by field (see the module's docstring)."""
+    if not isinstance(document, dict):
+        kind = {list: "a list", type(None): "null", str: "a string", bool: "a boolean"}.get(
+            type(document), "a number"
+        )
+        raise InputError(
+            f"not a bayescal thermal calibration: the file holds {kind}, not an object",
+            source=source,
+            fix="give a file written by bayescal thermal fit",
+        )
+    if document.get("schema") != SCHEMA:
+        raise InputError(
+            f"not a bayescal thermal calibration (schema {document.get('schema')!r})",
+            source=source,
+            fix="give a file written by bayescal thermal fit",
+        )
+    if document.get("schema_version") != SCHEMA_VERSION:
+        raise InputError(
+            f"calibration schema version {document.get('schema_version')!r}; this "
+            f"bayescal reads version {SCHEMA_VERSION}",
+            source=source,
+            fix="refit with this version (bayescal thermal fit)",
+        )
+    required = (
+        "channel",
+        "unit",
+        "temperature_unit",
+        "reference_temperature",
+        "degree",
+        "coefficients",
+        "covariance",
+        "temperature_range",
+        "noise",
+        "provenance",
+    )
+    for name in required:
+        if name not in document:
+            raise _field_error(source, name, "is missing")
+    for name in ("channel", "unit", "temperature_unit"):
+        if not isinstance(document[name], str) or not document[name].strip():
+            raise _field_error(source, name, f"must be a name, not {document[name]!r}")
+    if parse_unit(document["temperature_unit"]).quantity != "temperature":
+        raise _field_error(
+            source,
+            "temperature_unit",
+            f"{document['temperature_unit']!r} is not a temperature unit",
+        )
+    _finite_number(document, "reference_temperature", source)
+    degree = document["degree"]
+    if not isinstance(degree, int) or isinstance(degree, bool) or not 0 <= degree <= MAX_DEGREE:
+        raise _field_error(
+            source, "degree", f"must be a whole number 0..{MAX_DEGREE}, not {degree!r}"
+        )
+    size = degree + 1
+    _numbers(document["coefficients"], (size,), "coefficients", source)
+    covariance = _numbers(document["covariance"], (size, size), "covariance", source)
+    scale = float(np.max(np.abs(covariance))) or 1.0
+    if not np.allclose(covariance, covariance.T, rtol=1e-8, atol=1e-12 * scale):
+        raise _field_error(source, "covariance", "is not symmetric")
+    if np.min(np.linalg.eigvalsh(covariance)) < -1e-9 * scale:
+        raise _field_error(
+            source, "covariance", "is not positive semi-definite (a variance below zero)"
+        )
+    low, high = _numbers(document["temperature_range"], (2,), "temperature_range", source)
+    if low > high:
+        raise _field_error(source, "temperature_range", "must be [lowest, highest]")
+    _check_noise(document["noise"], source)
+    earth = document.get("earth_rate")
+    if earth is not None and (
+        not isinstance(earth, dict)
+        or not _is_number(earth.get("value"))
+        or not math.isfinite(earth["value"])
+    ):
+        raise _field_error(source, "earth_rate", "must be null or an object with a finite value")
+    if not isinstance(document["provenance"], list) or not all(
+        isinstance(step, dict) for step in document["provenance"]
+    ):
+        raise _field_error(source, "provenance", "must be a list of steps (objects)")
+    for name in ("bayesian", "classical", "offsets", "drift"):
+        if document.get(name) is not None and not isinstance(document[name], dict):
+            raise _field_error(source, name, "must be an object (or absent)")
 
 
 def gap_free_runs(values: np.ndarray, minimum: int = 16) -> tuple[tuple[int, int], ...]:
@@ -606,7 +750,12 @@ def fit_thermal(
     >>> calibration.coefficients.round(2)
     array([0.5 , 0.01])
     """
-    noise_terms = parse_terms(terms) if isinstance(terms, str) else tuple(terms)
+    noise_terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
+    if noise_terms == AUTO:
+        raise InputError(
+            "--terms auto: a thermal calibration takes its noise terms as given",
+            fix=f"name them (default: {','.join(NOISE_TERMS)})",
+        )
     if "rate_ramp" in noise_terms:
         raise InputError("--terms: a ramp cannot be told from a thermal drift; leave it out")
     if degree != "auto" and not (
@@ -664,28 +813,67 @@ def fit_thermal(
     return _from_fit(base, fit)
 
 
-def load_thermal_calibration(path, *, unit: str | None = None) -> ThermalCalibration:
+def load_thermal_calibration(
+    path,
+    *,
+    unit: str | None = None,
+    channel: str | None = None,
+    temperature_unit: str | None = None,
+) -> ThermalCalibration:
     """Read a calibration file written by :meth:`ThermalCalibration.save` (or ``bayescal
-    thermal fit``), checked against its schema; with ``unit``, also that it is for a channel
-    in that unit.
+    thermal fit``), checked field by field against its schema; with ``unit``, ``channel``
+    and ``temperature_unit``, also that it was made for a channel of that name and unit and
+    for temperatures in that unit.
 
     Raises
     ------
     InputError
-        No such file, not JSON, another schema or version, another unit.
+        No such file, not JSON, another schema or version, a field missing or malformed,
+        another channel, unit or temperature unit.
     """
     source = str(path)
     try:
-        document = json.loads(Path(path).read_text(encoding="utf-8"))
+        document = json.loads(Path(path).read_text(encoding="utf-8-sig"))
     except FileNotFoundError:
         raise InputError("no such calibration file", source=source, fix="check the path") from None
+    except IsADirectoryError:
+        raise InputError(
+            "is a folder, not a calibration file", source=source, fix="check the path"
+        ) from None
+    except PermissionError:
+        raise InputError("cannot be read (permission denied)", source=source) from None
+    except UnicodeDecodeError:
+        raise InputError(
+            "not a JSON calibration file (it is not text)",
+            source=source,
+            fix="give a file written by bayescal thermal fit",
+        ) from None
     except json.JSONDecodeError as error:
-        raise InputError(f"not a JSON calibration file: {error}", source=source) from None
+        raise InputError(
+            f"not a JSON calibration file: {error}",
+            source=source,
+            fix="give a file written by bayescal thermal fit",
+        ) from None
     calibration = replace(ThermalCalibration.from_document(document, source), origin=source)
+    if channel is not None and calibration.channel != channel:
+        raise InputError(
+            f"the calibration was made for channel '{calibration.channel}', not '{channel}'",
+            source=source,
+            fix=f"use the calibration of '{channel}' (or name the channel "
+            f"'{calibration.channel}' if it is the same sensor axis)",
+        )
     if unit is not None and calibration.unit != unit:
         raise InputError(
             f"the calibration is in {calibration.unit} but the channel is in {unit}",
             source=source,
             fix="pass --unit to match, or refit in this unit",
+        )
+    if temperature_unit is not None and calibration.temperature_unit != temperature_unit:
+        raise InputError(
+            f"the calibration's temperatures are in {calibration.temperature_unit} but the "
+            f"temperature column is in {temperature_unit}",
+            source=source,
+            fix=f"give the temperature in {calibration.temperature_unit} (write the unit in the "
+            "header, e.g. temperature[degF]), or refit",
         )
     return calibration

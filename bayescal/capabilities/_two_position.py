@@ -5,6 +5,7 @@ leaves out."""
 
 import math
 from dataclasses import dataclass
+from functools import partial
 
 import jax.numpy as jnp
 import numpy as np
@@ -14,14 +15,15 @@ from .._errors import HealthCheckError
 from ..classical._allan import allan_deviation
 from ..classical._gravity import LocalGravity
 from ..classical._two_position import Section, check_sections, classical_two_position
-from ..inference._noise_posterior import NoisePosterior, sample_noise
+from ..inference._checks import posterior_checks
+from ..inference._noise_posterior import NoisePosterior
 from ..inference._priors import default_prior
+from ..inference._selection import TermSelection
 from ..models._components import SPECTRAL_COMPONENTS, component_weights
 from ..models._level import bias_given_noise, level_summary
-from ..models._noise_problem import NoiseProblem
-from ..models._terms import DEFAULT_TERMS, parse_terms
+from ..models._terms import DEFAULT_TERMS, check_terms, parse_terms
 from ..models._two_position import offset_drift_weights
-from ..models._whittle import spectral_summary
+from ._noise import noise_posterior
 
 
 @dataclass(frozen=True)
@@ -31,6 +33,16 @@ class BayesianTwoPosition:
     map_values: dict
     map_sd: dict
     noise: NoisePosterior
+    checks: tuple = ()
+    """The noise model's checks against the two sections (Allan deviation, spectrum, lag-1
+    autocorrelation: :func:`~bayescal.inference._checks.noise_model_checks`)."""
+    selection: TermSelection | None = None
+    """How the noise terms were chosen (``terms="auto"``)."""
+
+    @property
+    def misfits(self) -> tuple[str, ...]:
+        """Where the noise model does not fit the sections, and by how much."""
+        return tuple(check["misfit"] for check in self.checks if not check["passed"])
 
 
 def bayesian_two_position(
@@ -41,17 +53,24 @@ def bayesian_two_position(
     *,
     terms: tuple[str, ...],
     gap_s: float | None,
+    unit: str,
     seed: int,
     progress: bool = False,
 ) -> BayesianTwoPosition:
     """Joint posterior of scale, offset and g_local; ``gap_s`` is the time between the
     starts of the sections when it is known (one file)."""
     joined = np.concatenate([up.values, [np.nan], down.values])
-    prior = default_prior(terms, allan_deviation(joined, rate_hz))
-    problem = NoiseProblem(
-        spectral_summary(joined, rate_hz), level_summary(up.values, rate_hz), prior
+    noise, selection, lsb = noise_posterior(
+        joined,
+        rate_hz,
+        terms=terms,
+        prior_of=partial(default_prior, allan=allan_deviation(joined, rate_hz)),
+        level_values=up.values,
+        seed=seed,
+        progress=progress,
     )
-    noise = sample_noise(problem, terms=terms, seed=seed, progress=progress)
+    checks = tuple(posterior_checks(noise, joined, unit))
+    rounding = lsb**2 / (12.0 * rate_hz)
     rng = np.random.default_rng(seed + 1)
 
     levels = {
@@ -61,7 +80,8 @@ def bayesian_two_position(
     drift = offset_drift_weights(gap_s, rate_hz) if gap_s else np.zeros(len(SPECTRAL_COMPONENTS))
 
     def level_draws(parameters, ramp):
-        weights = np.asarray(component_weights(**parameters))
+        weights = np.array(component_weights(**parameters))
+        weights[..., 0] += rounding
         conditional = {
             name: [
                 np.asarray(v)
@@ -109,7 +129,7 @@ def bayesian_two_position(
         "offset": math.sqrt(float(up_var + down_var + drift_at_map)) / 2,
         "g_local": gravity.uncertainty,
     }
-    return BayesianTwoPosition(draws, map_values, map_sd, noise)
+    return BayesianTwoPosition(draws, map_values, map_sd, noise, checks, selection)
 
 
 @dataclass(frozen=True)
@@ -130,15 +150,25 @@ class TwoPositionCalibration:
     bayesian: BayesianTwoPosition | None
 
     @property
+    def failures(self) -> tuple[str, ...]:
+        """The posterior's failed sampler checks, then where its noise model misfits."""
+        if self.bayesian is None:
+            return ()
+        return (
+            *self.bayesian.noise.diagnostics.failures,
+            *(f"noise model misfit: {misfit}" for misfit in self.bayesian.misfits),
+        )
+
+    @property
     def passed(self) -> bool:
-        return self.bayesian is None or bool(self.bayesian.noise.diagnostics.passed)
+        """Whether the posterior passed its sampler checks and its noise model fits."""
+        return not self.failures
 
     def check(self) -> "TwoPositionCalibration":
         """Raise :class:`~bayescal.HealthCheckError` when the posterior failed its checks."""
         if not self.passed:
             raise HealthCheckError(
-                "two-position: posterior checks failed: "
-                + "; ".join(self.bayesian.noise.diagnostics.failures)
+                "two-position: posterior checks failed: " + "; ".join(self.failures)
             )
         return self
 
@@ -211,12 +241,20 @@ def calibrate_two_position(
         else Section(np.asarray(section, float), 0.0, "<array>")
         for section in (up, down)
     )
-    terms = parse_terms(terms) if isinstance(terms, str) else tuple(terms)
+    terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
     check_sections(up, down, unit, channel)
     classical = classical_two_position(up.values, down.values, gravity, confidence)
     posterior = (
         bayesian_two_position(
-            up, down, rate_hz, gravity, terms=terms, gap_s=gap_s, seed=seed, progress=progress
+            up,
+            down,
+            rate_hz,
+            gravity,
+            terms=terms,
+            gap_s=gap_s,
+            unit=unit,
+            seed=seed,
+            progress=progress,
         )
         if bayesian
         else None

@@ -5,9 +5,16 @@
 - Allan deviation with chi-square intervals (:mod:`bayescal._allan`);
 - the IEEE Std 952-1997 (Annex C) slope readings: N on the -1/2 line at tau = 1 s, K on the
   +1/2 line at tau = 3 s, B from the flat floor / sqrt(2 ln 2 / pi), Q on the -1 line at
-  tau = sqrt(3) s. Where the curve has no stretch of the term's slope, the reading is
-  replaced by the upper bound the curve puts on the term (each term's Allan variance is at
-  most the total), read from the upper confidence limits;
+  tau = sqrt(3) s. A line is read on the stretch of the curve whose local slope is the term's
+  (and extrapolated along the line to its reading tau); the floor at a minimum where the curve
+  is flat on both sides. A reading is kept only where the term's own curve, at the reading's
+  lower confidence limit, stays within the measured Allan deviation's upper limits at every
+  tau, to within 10 % (over the first ten sample periods, where the sensor's output filter
+  lowers the curve, within a factor two): a term's Allan variance is at most the total, so a
+  reading that would exceed it materially was taken off the term's slope (the edge of a
+  bump, a turning point). Otherwise — and where the
+  curve has no stretch of the term's slope — the reading is replaced by the upper bound the
+  curve puts on the term, read from the upper confidence limits;
 - the validity of the t-interval. It assumes independent samples. The Allan variance at tau
   is the variance of tau-averages, so the standard error of the mean over k = T / tau
   batches is ADEV(tau) / sqrt(k) (batch means, with the Allan variance as the batch variance
@@ -29,6 +36,21 @@ from ._allan import DeviationResult, allan_deviation
 _MIN_BATCHES = 8
 # A local slope within this distance of a term's slope counts as that term's stretch.
 _SLOPE_TOLERANCE = 0.125
+# The curve is flat at its minimum when both neighbouring local slopes lie within this of 0
+# (a white-noise -1/2 meeting a +1/2 random walk has no floor between them).
+_FLOOR_TOLERANCE = 0.25
+# Over the first few sample periods a sensor's output filter lowers the Allan deviation below
+# the white noise's line (a one-tap filter by up to a third at one period, a steeper low-pass
+# more): there a reading's line may exceed the curve by up to this factor before the reading
+# counts as off its slope. Off-slope readings exceed it by far more (a Q read on the edge of
+# a spectral bump: tenfold).
+_SAMPLING_PERIODS = 10
+_SAMPLING_FACTOR = 2.0
+# Elsewhere a reading whose line exceeds the curve by less than this fraction is kept: the
+# term's stretch also carries a little of its neighbours (a -1/2 stretch some flicker), and a
+# long record's tight intervals would otherwise demote every reading. The fit checks of a
+# model use the same materiality (10 % in Allan deviation).
+_MATERIAL_EXCESS = 0.10
 
 # parameter -> (slope, c) of its Allan-deviation line sigma(tau) = c * parameter * tau**slope
 # (DESIGN.md table): Q sqrt(3)/tau, N/sqrt(tau), K sqrt(tau/3). The line crosses the value of
@@ -47,6 +69,8 @@ class SlopeReading(eqx.Module):
     local_slope: float
     kind: str = eqx.field(static=True)
     """"reading" on a stretch of the term's slope, or "upper_bound" where there is none."""
+    reason: str = eqx.field(static=True, default="")
+    """Why an upper bound replaced the reading (empty for a reading)."""
 
 
 class TIntervalCheck(eqx.Module):
@@ -86,6 +110,37 @@ def _local_slopes(allan: DeviationResult) -> np.ndarray:
     return np.diff(np.log(allan.deviation)) / np.diff(np.log(allan.tau))
 
 
+def _upper_bound(allan: DeviationResult, scale: np.ndarray, reason: str) -> SlopeReading:
+    """The bound the whole curve puts on a term whose Allan deviation is ``parameter *
+    scale``: each term's Allan variance is at most the total, so at every tau parameter <=
+    sigma(tau) / scale(tau); the upper confidence limit makes it a bound."""
+    bound = allan.ci_high / scale
+    tightest = int(np.argmin(bound))
+    local = _local_slopes(allan)
+    nearest = float(local[min(tightest, local.size - 1)]) if local.size else math.nan
+    return SlopeReading(
+        float(allan.deviation[tightest] / scale[tightest]),
+        0.0,
+        float(bound[tightest]),
+        float(allan.tau[tightest]),
+        nearest,
+        "upper_bound",
+        reason,
+    )
+
+
+def _within_the_curve(allan: DeviationResult, low: float, scale: np.ndarray) -> bool:
+    """Whether a term no larger than its reading's lower limit stays within the measured
+    curve's upper limits (a reading whose interval lies wholly above the curve somewhere was
+    not taken on the term's own slope): within ``_MATERIAL_EXCESS`` of them at every tau from
+    ``_SAMPLING_PERIODS`` sample periods on, and within a factor ``_SAMPLING_FACTOR`` below
+    that, where the sensor's output filter legitimately lowers the curve under the white
+    noise's line."""
+    sampling = allan.m < _SAMPLING_PERIODS
+    allowed = allan.ci_high * np.where(sampling, _SAMPLING_FACTOR, 1.0 + _MATERIAL_EXCESS)
+    return bool(np.all(low * scale <= allowed))
+
+
 def _line_reading(allan: DeviationResult, parameter: str) -> SlopeReading:
     slope, coefficient = _SLOPE_LINES[parameter]
     tau = allan.tau
@@ -100,36 +155,40 @@ def _line_reading(allan: DeviationResult, parameter: str) -> SlopeReading:
                 float(np.exp(np.mean(np.log(values[pair] / scale[pair]))))
                 for values in (allan.deviation, allan.ci_low, allan.ci_high)
             ]
-            return SlopeReading(
-                *read, math.sqrt(tau[best] * tau[best + 1]), float(local[best]), "reading"
+            where = math.sqrt(tau[best] * tau[best + 1])
+            if _within_the_curve(allan, read[1], scale):
+                return SlopeReading(*read, where, float(local[best]), "reading")
+            return _upper_bound(
+                allan,
+                scale,
+                f"the stretch of slope {local[best]:+.2f} at tau = {where:.3g} s gives a term "
+                "larger than the measured curve elsewhere: not the term's own slope",
             )
-    # Each term's Allan variance is at most the total, so at every tau
-    # parameter <= sigma(tau) / (c tau**slope); the upper confidence limit makes it a bound.
-    bound = allan.ci_high / scale
-    tightest = int(np.argmin(bound))
-    nearest = float(local[min(tightest, local.size - 1)]) if local.size else math.nan
-    return SlopeReading(
-        float(allan.deviation[tightest] / scale[tightest]),
-        0.0,
-        float(bound[tightest]),
-        float(tau[tightest]),
-        nearest,
-        "upper_bound",
-    )
+        return _upper_bound(allan, scale, f"no stretch of slope {slope:+g}")
+    return _upper_bound(allan, scale, "too few averaging times")
 
 
 def _floor_reading(allan: DeviationResult) -> SlopeReading:
     lowest = int(np.argmin(allan.deviation))
     local = _local_slopes(allan)
-    interior = 0 < lowest < allan.tau.size - 1
-    nearest = float(local[min(lowest, local.size - 1)]) if local.size else math.nan
+    scale = np.full(allan.tau.shape, BIAS_INSTABILITY_FACTOR)
+    if not 0 < lowest < allan.tau.size - 1:
+        return _upper_bound(allan, scale, "the curve's minimum is at its end")
+    around = local[lowest - 1 : lowest + 1]
+    if np.any(np.abs(around) > _FLOOR_TOLERANCE):
+        return _upper_bound(
+            allan,
+            scale,
+            f"the curve turns at its minimum (local slopes {around[0]:+.2f}, {around[1]:+.2f}) "
+            "without flattening into a floor",
+        )
     return SlopeReading(
         float(allan.deviation[lowest] / BIAS_INSTABILITY_FACTOR),
-        float(allan.ci_low[lowest] / BIAS_INSTABILITY_FACTOR) if interior else 0.0,
+        float(allan.ci_low[lowest] / BIAS_INSTABILITY_FACTOR),
         float(allan.ci_high[lowest] / BIAS_INSTABILITY_FACTOR),
         float(allan.tau[lowest]),
-        nearest,
-        "reading" if interior else "upper_bound",
+        float(around[np.argmax(np.abs(around))]),
+        "reading",
     )
 
 

@@ -8,38 +8,87 @@ import sys
 from .._errors import InputError
 
 
-def positive_float(text: str) -> float:
+def _number(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-    if not (value > 0 and math.isfinite(value)):
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text} must be a finite number")
+    return value
+
+
+def _whole(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+
+
+def bounded_float(low: float, high: float, what: str = ""):
+    """An argument type: a finite number from ``low`` to ``high``."""
+
+    def parse(text: str) -> float:
+        value = _number(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{text} must lie between {low:g} and {high:g}{what}")
+        return value
+
+    parse.__name__ = "number"
+    return parse
+
+
+def bounded_int(low: int, high: int):
+    """An argument type: a whole number from ``low`` to ``high``."""
+
+    def parse(text: str) -> int:
+        value = _whole(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{text} must be a whole number from {low} to {high}")
+        return value
+
+    parse.__name__ = "whole number"
+    return parse
+
+
+def finite_float(text: str) -> float:
+    return _number(text)
+
+
+def positive_float(text: str) -> float:
+    value = _number(text)
+    if not value > 0:
         raise argparse.ArgumentTypeError(f"{text} must be a positive number")
     return value
 
 
+latitude = bounded_float(-90.0, 90.0, " degrees")
+height = bounded_float(-500.0, 20_000.0, " m (the gravity formula's range)")
+rate = bounded_float(1e-3, 1e7, " Hz")
+minutes = bounded_float(0.5, 24 * 60.0, " minutes")
+walkers = bounded_int(2, 10_000)
+max_steps = bounded_int(1, 10**8)
+max_effects = bounded_int(1, 20)
+row_count = bounded_int(0, 10**9)
+axis = bounded_int(0, 31)
+
+
 def confidence(text: str) -> float:
-    value = positive_float(text)
-    if not value < 1:
-        raise argparse.ArgumentTypeError(f"{text} must lie between 0 and 1 (0.95 for 95 %)")
+    value = _number(text)
+    if not 0.5 <= value <= 0.9999:
+        raise argparse.ArgumentTypeError(f"{text} must lie between 0.5 and 0.9999 (0.95 for 95 %)")
     return value
 
 
 def seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+    value = _whole(text)
     if not 0 <= value < 2**32:
         raise argparse.ArgumentTypeError(f"{text} must be a whole number from 0 to 2^32 - 1")
     return value
 
 
 def positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+    value = _whole(text)
     if value < 1:
         raise argparse.ArgumentTypeError(f"{text} must be at least 1")
     return value
@@ -55,16 +104,50 @@ def taus(text: str):
             raise argparse.ArgumentTypeError(f"'{text}' is not a list of seconds") from None
         if not values:
             raise argparse.ArgumentTypeError(f"'{text}' names no averaging time")
+        if not all(math.isfinite(v) and v > 0 for v in values):
+            raise argparse.ArgumentTypeError(f"'{text}': averaging times must be positive seconds")
         return values
-    try:
-        count = int(text)
-    except ValueError:
+    count = _whole(text) if text.strip().lstrip("+-").isdigit() else None
+    if count is None:
         raise argparse.ArgumentTypeError(
             f"'{text}' is not 'all', 'octave', 'decade', a count or a list of seconds"
-        ) from None
-    if count < 2:
-        raise argparse.ArgumentTypeError(f"{text}: ask for at least 2 taus")
+        )
+    if not 2 <= count <= 10_000:
+        raise argparse.ArgumentTypeError(f"{text}: ask for 2 to 10000 taus")
     return count
+
+
+def scale(text: str) -> float | str:
+    """``--scale``: a factor (``0.061``, ``1/131``) or the name of a sensor card."""
+    numerator, slash, denominator = text.partition("/")
+    try:
+        value = float(numerator) / float(denominator) if slash else float(text)
+    except ValueError:
+        if any(ch.isdigit() for ch in numerator[:1]) or slash:
+            raise argparse.ArgumentTypeError(
+                f"'{text}' is neither a factor (0.061, 1/131) nor a sensor card's name"
+            ) from None
+        return text.strip()
+    except ZeroDivisionError:
+        raise argparse.ArgumentTypeError(f"'{text}' divides by zero") from None
+    if not (math.isfinite(value) and value != 0):
+        raise argparse.ArgumentTypeError(f"{text} must be a finite factor other than 0")
+    return value
+
+
+def column_names(text: str) -> list[str] | dict[str, list[str]]:
+    """``--names a,b,c`` or ``--names VAR:a,b,c``."""
+    variable, colon, rest = text.partition(":")
+    if colon and "," not in variable and "[" not in variable:
+        listed = rest
+    else:
+        variable, listed = None, text
+    names = [part.strip() for part in listed.split(",")]
+    if not all(names):
+        raise argparse.ArgumentTypeError(f"'{text}': a name is empty")
+    if len(set(names)) != len(names):
+        raise argparse.ArgumentTypeError(f"'{text}' names a column twice")
+    return {variable.strip(): names} if variable else names
 
 
 def three_columns(text: str) -> tuple[str, str, str]:
@@ -90,8 +173,9 @@ def add_recording_arguments(
     group.add_argument(
         "file",
         nargs="?" if file_optional else None,
-        help="recording: .csv, .parquet or .npz, or a ROS bag (.bag, .db3, .mcap or a ROS 2 "
-        "bag folder)",
+        help="recording: a text table (.csv, .txt, .tsv: comma, semicolon, tab or space "
+        "separated), .parquet, .npz, .npy, .mat (v4/5/7.3), or a ROS bag (.bag, .db3, .mcap "
+        "or a ROS 2 bag folder)",
     )
     if channel == "one":
         group.add_argument("--channel", help="column to analyse, e.g. gyro_x")
@@ -120,14 +204,52 @@ def add_recording_arguments(
         "default: from the header, e.g. gyro_x[deg/s]",
     )
     group.add_argument(
+        "--scale",
+        type=scale,
+        metavar="FACTOR|SENSOR",
+        help="multiply the channel by FACTOR (raw counts to --unit: 1/131 for 131 LSB per "
+        "deg/s), or by the resolution a sensor card gives (bayescal sensors), which also "
+        "sets the unit",
+    )
+    group.add_argument(
         "--rate",
-        type=positive_float,
+        type=rate,
         metavar="HZ",
         help="sample rate; samples are then taken as evenly spaced",
     )
     group.add_argument("--time-column", metavar="NAME", help="time column (default: time or t)")
     group.add_argument(
         "--time-unit", metavar="UNIT", help="unit of the time column (s, ms, us, ns)"
+    )
+    group.add_argument(
+        "--skip-rows",
+        type=row_count,
+        default=0,
+        metavar="N",
+        help="text table: lines before the header to skip (logger metadata); lines that "
+        "start with '#' are skipped anyway",
+    )
+    group.add_argument(
+        "--names",
+        type=column_names,
+        metavar="[VAR:]A,B,...",
+        help="names of the columns of a table without a header, or of the channels of an "
+        "array (.npz/.npy/.mat; VAR: which array), e.g. t,gyro_x,gyro_y,gyro_z; a unit may "
+        "follow in brackets, gyro_x[deg/s] (default: column_0 ..., or VAR_0 ...)",
+    )
+    group.add_argument(
+        "--samples-axis",
+        type=axis,
+        metavar="K",
+        help="array of two or more axes: the axis that holds the samples, from 0 (default: "
+        "the longest)",
+    )
+    group.add_argument(
+        "--channels-axis",
+        type=axis,
+        metavar="K",
+        help="array of two or more axes: the axis that holds the channels (default: the last "
+        "other axis); further axes become records, named NAME_rec0, NAME_rec1, ...",
     )
     group.add_argument(
         "--gaps",
@@ -145,12 +267,15 @@ def add_recording_arguments(
     group = parser.add_argument_group("window")
     group.add_argument(
         "--start",
-        type=float,
+        type=finite_float,
         metavar="S",
         help="start of the window, seconds from the first sample",
     )
     group.add_argument(
-        "--stop", type=float, metavar="S", help="end of the window, seconds from the first sample"
+        "--stop",
+        type=finite_float,
+        metavar="S",
+        help="end of the window, seconds from the first sample",
     )
     group.add_argument(
         "--pad",
@@ -177,13 +302,60 @@ def load(args, path=None):
     path = path or args.file
     if not path:
         raise InputError("no recording given", fix="pass a FILE")
-    return load_recording(path, topic=getattr(args, "topic", None))
+    return load_recording(
+        path,
+        topic=getattr(args, "topic", None),
+        skip_rows=getattr(args, "skip_rows", 0),
+        names=getattr(args, "names", None),
+        samples_axis=getattr(args, "samples_axis", None),
+        channels_axis=getattr(args, "channels_axis", None),
+    )
 
 
-def grid_options(args) -> dict:
-    """How a channel is put on its sample grid, from the recording arguments."""
+def unit_and_scale(args, name: str | None) -> tuple[str | None, float | None]:
+    """The unit and scale factor of channel ``name``: ``--unit`` and ``--scale`` as given,
+    or, for ``--scale SENSOR``, the resolution of that sensor card's gyro or accelerometer
+    (chosen by ``--unit``, else by the channel's name) in ``--unit`` or in its own unit."""
+    given = getattr(args, "scale", None)
+    if not isinstance(given, str):
+        return args.unit, given
+    from ..recording._columns import is_accel_name, is_gyro_name
+    from ..recording._sensor_cards import find_card
+    from ..recording._units import parse_unit
+
+    card = find_card(given)
+    quantity = parse_unit(args.unit).quantity if args.unit else None
+    if quantity is None and name is not None:
+        if is_gyro_name(name) and not is_accel_name(name):
+            quantity = "angular_rate"
+        elif is_accel_name(name) and not is_gyro_name(name):
+            quantity = "acceleration"
+    section = {"angular_rate": "gyro", "acceleration": "accelerometer"}.get(quantity)
+    if section is None:
+        raise InputError(
+            f"--scale {given}: is '{name}' a gyro or an accelerometer?",
+            fix="pass --unit deg/s (or another rate) or --unit g (or another acceleration)",
+        )
+    entry = card.content.get(section, {}).get("resolution")
+    if not isinstance(entry, dict) or "value" not in entry or "unit" not in entry:
+        raise InputError(
+            f"--scale {given}: the sensor card gives no [{section}] resolution",
+            fix="pass the factor itself, e.g. --scale 1/131",
+        )
+    resolution = parse_unit(entry["unit"].replace("ug", "µg"))
+    if not args.unit:
+        return resolution.name, float(entry["value"])
+    target = parse_unit(args.unit)
+    return target.name, float(entry["value"]) * resolution.to_si / target.to_si
+
+
+def grid_options(args, name: str | None = None) -> dict:
+    """How channel ``name`` is read and put on its sample grid, from the recording
+    arguments."""
+    unit, factor = unit_and_scale(args, name)
     return {
-        "unit": args.unit,
+        "unit": unit,
+        "scale": factor,
         "rate": args.rate,
         "time_column": args.time_column,
         "time_unit": args.time_unit,
@@ -227,25 +399,35 @@ def channel_of(args, recording, name: str, **extra):
     """Column ``name`` of ``recording`` on its grid, in the window the arguments choose; the
     channel and the window's description."""
     start, stop, described = window(args, recording)
-    channel = recording.channel(name, start=start, stop=stop, **grid_options(args), **extra)
+    channel = recording.channel(name, start=start, stop=stop, **grid_options(args, name), **extra)
     return channel, {"start_s": channel.start_s, "stop_s": channel.stop_s, **described}
 
 
 def output_folder(path):
-    """``--out DIR``: a folder that exists or whose parent does (checked before any work)."""
-    from pathlib import Path
+    """``--out DIR``: a folder that exists or whose parent does (checked before any work).
+    :func:`declare_outputs` also makes it one of the run's outputs."""
+    from .._output import check_folder
 
-    if path is None:
-        return None
-    folder = Path(path)
-    if folder.exists() and not folder.is_dir():
-        raise InputError(f"--out {folder}: exists and is not a folder", fix="choose a folder")
-    if not folder.parent.is_dir():
-        raise InputError(
-            f"--out {folder}: folder '{folder.parent}' does not exist",
-            fix="create it or choose another path",
-        )
-    return folder
+    return None if path is None else check_folder(path, "--out")
+
+
+def declare_outputs(inputs=(), files: dict | None = None, folders: dict | None = None):
+    """Before any work: the run's input files, its output files (argument -> path) and
+    folders (argument -> path), checked — writable, no output an input or another output —
+    and held by the run's :class:`~bayescal._output.Outputs` (which creates the folders now
+    and removes them again if the run fails). Returns the folders as paths (None where not
+    given), in the order given."""
+    from .._output import Outputs
+
+    outputs = Outputs.active() or Outputs()
+    outputs.add_inputs(*inputs)
+    for argument, path in (files or {}).items():
+        if path is not None:
+            outputs.claim(path, argument)
+    made = []
+    for argument, path in (folders or {}).items():
+        made.append(outputs.folder(path, argument) if path is not None else None)
+    return made
 
 
 def gravity(latitude: float | None, height: float | None, given: str | None):
@@ -273,6 +455,53 @@ def gravity(latitude: float | None, height: float | None, given: str | None):
             "local gravity needed", fix="pass --latitude DEG (and --height M) or --g-local VALUE±U"
         )
     return local_gravity(latitude, height or 0.0)
+
+
+def require_acceleration(channel, command: str) -> None:
+    """An accelerometer calibration needs a channel in a unit of acceleration (g, m/s^2 ...)
+    or in counts; an angular rate or another physical unit is a mistake."""
+    from ..recording._units import parse_unit
+
+    quantity = parse_unit(channel.unit).quantity
+    if quantity not in ("acceleration", "unknown"):
+        raise InputError(
+            f"{command} calibrates an accelerometer, and the unit {channel.unit} is a unit of "
+            f"{quantity.replace('_', ' ')}, not of acceleration",
+            source=channel.source,
+            fix="pass --unit g or --unit m/s^2 (or a count unit such as LSB)",
+        )
+
+
+def require_bayesian_run(channel, alternative: str | None = None) -> None:
+    """The Bayesian noise model reads the spectrum of gap-free runs longer than
+    ``MIN_INCREMENTS`` samples: refuse a channel without one, before the model is built."""
+    import numpy as np
+
+    from ..models._whittle import MIN_INCREMENTS
+
+    present = np.concatenate(([0], np.isfinite(channel.values).astype(np.int8), [0]))
+    edges = np.flatnonzero(np.diff(present))
+    longest = int(np.max(edges[1::2] - edges[::2], initial=0))
+    if longest <= MIN_INCREMENTS:
+        raise InputError(
+            f"the Bayesian model needs a run of at least {MIN_INCREMENTS + 1} samples without "
+            f"a gap, and the longest here has {longest}",
+            source=channel.source,
+            column=channel.channel,
+            fix="record longer or widen the window"
+            + (f", or {alternative}" if alternative else ""),
+        )
+
+
+def walker_note(diagnostics: dict, requested: int) -> list[str]:
+    """A note when the sampler ran more walkers than ``--walkers`` asked for."""
+    used = diagnostics.get("n_walkers")
+    if used is None or used == requested:
+        return []
+    return [
+        f"--walkers {requested} raised to {used}: emcee needs more than twice the model's "
+        "parameters, in a multiple of the R-hat groups"
+    ]
 
 
 def health_exit(command: str, failures: list[str]) -> int:

@@ -7,10 +7,10 @@ from .._errors import InputError
 from ._arguments import (
     add_recording_arguments,
     channel_of,
+    declare_outputs,
     health_exit,
     load,
-    output_folder,
-    positive_int,
+    max_effects,
     seed,
 )
 
@@ -25,7 +25,6 @@ def add_parser(commands) -> None:
     add_recording_arguments(parser, temperature=True)
     parser.add_argument(
         "--baseline",
-        default=DEFAULT_BASELINE,
         metavar="TERMS",
         help="noise terms of the starting model besides the bias (default: white, the model "
         "behind the classical pad numbers), e.g. white,bias_instability",
@@ -37,7 +36,7 @@ def add_parser(commands) -> None:
         "becomes the baseline, and discovery reports what the real recording holds beyond it",
     )
     parser.add_argument(
-        "--max-effects", type=positive_int, default=4, metavar="N", help="stop after N effects (4)"
+        "--max-effects", type=max_effects, default=4, metavar="N", help="stop after N effects (4)"
     )
     parser.add_argument("--json", metavar="PATH", help="write the findings as JSON")
     parser.add_argument(
@@ -103,22 +102,23 @@ def _check_baseline(baseline) -> None:
 
 
 def run(args) -> int:
-    from .._output import check_writable, write_json
+    from .._output import write_json
 
     if not args.file:
         raise InputError("no recording given", fix="pass a FILE")
     if not args.channel:
         raise InputError("--channel is required", source=args.file, fix="e.g. --channel gyro_x")
-    if args.json:
-        check_writable(args.json, "--json")
-    folder = output_folder(args.out)
-    baseline = tuple(part.strip() for part in args.baseline.split(",") if part.strip())
-    _check_baseline(baseline)
-    if args.sim and args.baseline != DEFAULT_BASELINE:
+    if args.sim and args.baseline is not None:
         raise InputError(
             "give --baseline or --sim, not both",
             fix="with --sim, the simulation's noise terms are the baseline",
         )
+    (folder,) = declare_outputs([args.file, args.sim], {"--json": args.json}, {"--out": args.out})
+    given = args.baseline if args.baseline is not None else DEFAULT_BASELINE
+    baseline = tuple(part.strip() for part in given.split(",") if part.strip())
+    if not baseline:
+        raise InputError(f"--baseline {given!r} names no term", fix="e.g. --baseline white")
+    _check_baseline(baseline)
     simulation = None
     if args.sim:
         baseline, simulation = _simulation_baseline(args)

@@ -1,8 +1,16 @@
 """The ``bayescal`` command: the parser of every command, and the one place exceptions become
-exit codes."""
+exit codes.
+
+Every command runs inside one :class:`~bayescal._output.Outputs`: its files appear together
+when it succeeds (exit 0, or 1 for a failed health check: the analysis ran and its output
+says which check failed), and none of them when it fails. Ctrl-C (SIGINT) and SIGTERM end the
+run the same way, with one line and the shell's codes 130 and 143, never a traceback.
+"""
 
 import argparse
+import contextlib
 import os
+import signal
 import sys
 
 from .._errors import BayescalError
@@ -49,15 +57,52 @@ def _command(args) -> str:
     return " ".join(part for part in (args.command, getattr(args, "step", None)) if part)
 
 
+INTERRUPTED = 128 + signal.SIGINT
+TERMINATED = 128 + signal.SIGTERM
+
+
+class _Terminated(BaseException):
+    """SIGTERM, raised where the run is so that it unwinds and cleans up (a BaseException:
+    no ``except Exception`` of the library swallows it)."""
+
+
+def _raise_terminated(signum, frame):
+    raise _Terminated
+
+
+@contextlib.contextmanager
+def _sigterm_unwinds():
+    """While the block runs, SIGTERM raises :class:`_Terminated` (in the main thread only;
+    the handler in place before is restored after)."""
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:  # not the main thread: leave signals to whoever owns them
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``bayescal`` with ``argv`` (the process's arguments when None); the exit code."""
+    from .._output import Outputs
+
     args = build_parser().parse_args(argv)
     _enable_compilation_cache()
     try:
-        return args.run(args)
+        with _sigterm_unwinds(), Outputs():
+            return args.run(args)
     except BayescalError as error:
         print(f"bayescal {_command(args)}: error: {error}", file=sys.stderr)
         return error.exit_code
+    except KeyboardInterrupt:
+        print(f"bayescal {_command(args)}: interrupted; no output written", file=sys.stderr)
+        return INTERRUPTED
+    except _Terminated:
+        print(f"bayescal {_command(args)}: terminated; no output written", file=sys.stderr)
+        return TERMINATED
     except Exception as error:
         if os.environ.get("BAYESCAL_DEBUG"):
             raise

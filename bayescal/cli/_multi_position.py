@@ -1,13 +1,18 @@
 """``bayescal multi-position``: scale, offset and misalignment of a three-axis accelerometer
 from many still poses."""
 
+import math
+
 from .._errors import InputError
 from ._arguments import (
     add_recording_arguments,
     confidence,
+    declare_outputs,
     gravity,
     grid_options,
     health_exit,
+    height,
+    latitude,
     load,
     progress,
     seed,
@@ -35,8 +40,8 @@ def add_parser(commands) -> None:
         help="free: any orientations, gravity's magnitude only (default); six-face: each pose "
         "on a face of a cube, every face at least once",
     )
-    parser.add_argument("--latitude", type=float, metavar="DEG", help="geodetic latitude")
-    parser.add_argument("--height", type=float, metavar="M", help="height above the ellipsoid")
+    parser.add_argument("--latitude", type=latitude, metavar="DEG", help="geodetic latitude")
+    parser.add_argument("--height", type=height, metavar="M", help="height above the ellipsoid")
     parser.add_argument("--g-local", metavar="VALUE[±U]", help="local gravity in m/s^2 instead")
     parser.add_argument("--confidence", type=confidence, default=0.95)
     parser.add_argument("--seed", type=seed, default=0)
@@ -53,10 +58,12 @@ def parse_sections(text: str) -> list[tuple[float, float]]:
         try:
             start, stop = (float(x) for x in part.split(":"))
         except ValueError:
+            start = stop = math.nan
+        if not (math.isfinite(start) and math.isfinite(stop)):
             raise InputError(
                 f"--sections {text!r}: cannot read {part.strip()!r}",
                 fix="write START:STOP,START:STOP,... in seconds from the first sample",
-            ) from None
+            )
         if not stop > start:
             raise InputError(f"--sections: {part.strip()} ends before it starts")
         sections.append((start, stop))
@@ -68,7 +75,14 @@ def _read(args):
     import numpy as np
 
     recording = load(args)
-    channels = [recording.channel(name, **grid_options(args)) for name in args.channels]
+    if len(set(args.channels)) != len(args.channels):
+        raise InputError(
+            f"--channels {','.join(args.channels)} names a column twice",
+            fix="name the three axes, e.g. acc_x,acc_y,acc_z",
+        )
+    channels = [
+        recording.channel(name, at_rest=False, **grid_options(args, name)) for name in args.channels
+    ]
     units = {channel.unit for channel in channels}
     if len(units) > 1:
         listed = ", ".join(f"{channel.channel} [{channel.unit}]" for channel in channels)
@@ -83,14 +97,13 @@ def _read(args):
 
 def run(args) -> int:
     """``bayescal multi-position``: 0 success, 1 a failed posterior health check, 2 bad input."""
-    from .._output import check_writable, write_json
+    from .._output import write_json
 
     if args.orientations not in ("free", "six-face"):
         raise InputError(
             f"--orientations {args.orientations!r} is not known", fix="choose free or six-face"
         )
-    if args.json:
-        check_writable(args.json, "--json")
+    declare_outputs([args.file], {"--json": args.json})
     local = gravity(args.latitude, args.height, args.g_local)
     sections = parse_sections(args.sections) if args.sections else None
     values, first, notes = _read(args)

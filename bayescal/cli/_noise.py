@@ -5,16 +5,19 @@ from ._arguments import (
     add_recording_arguments,
     channel_of,
     confidence,
+    declare_outputs,
     health_exit,
     load,
-    output_folder,
-    positive_int,
+    max_steps,
     progress,
+    require_bayesian_run,
     seed,
     taus,
+    walker_note,
+    walkers,
 )
 
-DEFAULT_TERMS = "white,bias_instability,rate_random_walk"
+DEFAULT_TERMS = "auto"
 
 
 def add_parser(commands) -> None:
@@ -59,15 +62,23 @@ def add_parser(commands) -> None:
         metavar=("FORMAT", "PATH"),
         help="also write the channel's noise for another tool: kalibr (imu.yaml) or matlab "
         "(gyroparams/accelparams script); a file already at PATH keeps the other sensor's "
-        "entries (repeatable)",
+        "entries and the other axes of this one (repeatable)",
+    )
+    parser.add_argument(
+        "--export-axes",
+        choices=("largest", "rms"),
+        default="largest",
+        help="one value per sensor covers every axis exported to a file: the largest of "
+        "them (default) or their RMS",
     )
     bayes = parser.add_argument_group("Bayesian model")
     bayes.add_argument(
         "--terms",
         default=DEFAULT_TERMS,
-        help="noise terms beside the bias: white, bias_instability (flicker), "
-        "rate_random_walk (rrw), quantization, rate_ramp (ramp), output_filter, or all "
-        f"(default: {DEFAULT_TERMS})",
+        help="noise terms beside the bias: auto (the default: white noise and every term "
+        "the record holds decisive evidence for), or a list of white, bias_instability "
+        "(flicker), rate_random_walk (rrw), quantization, rate_ramp (ramp), output_filter "
+        "(one-tap), decimation_filter, butterworth_filter, or all",
     )
     bayes.add_argument(
         "--sensor",
@@ -77,12 +88,10 @@ def add_parser(commands) -> None:
     bayes.add_argument(
         "--out", metavar="DIR", help="write the posterior (ArviZ netCDF) and the JSON into DIR"
     )
-    bayes.add_argument(
-        "--walkers", type=positive_int, default=32, help="emcee walkers (default 32)"
-    )
+    bayes.add_argument("--walkers", type=walkers, default=32, help="emcee walkers (default 32)")
     bayes.add_argument(
         "--max-steps",
-        type=positive_int,
+        type=max_steps,
         default=40_000,
         help="most emcee steps before the convergence check fails",
     )
@@ -110,13 +119,12 @@ def _recording(args):
 
 
 def run(args) -> int:
-    from .._output import check_writable, write_json, write_netcdf
+    from .._output import file_stem, write_json, write_netcdf
     from ..models._terms import parse_terms
 
     terms = parse_terms(args.terms)
-    folder = output_folder(args.out)
-    if args.json:
-        check_writable(args.json, "--json")
+    exports = {f"--export {fmt}": path for fmt, path in args.export or ()}
+    (folder,) = declare_outputs([args.file], {"--json": args.json, **exports}, {"--out": args.out})
     recording, name = _recording(args)
     channel, window = channel_of(args, recording, name)
     # The analysis's modules load once the input is known to be good.
@@ -125,7 +133,9 @@ def run(args) -> int:
     from ..report._export import plan_exports, write_exports
     from ..report._noise import noise_result, noise_text
 
-    exports = plan_exports(args.export, channel.unit, name, channel.source, recording.topic)
+    exports = plan_exports(
+        args.export, channel.unit, name, channel.source, recording.topic, args.export_axes
+    )
     fit = None
     if args.classical_only:
         try:
@@ -137,6 +147,7 @@ def run(args) -> int:
                 error.problem, source=channel.source, column=name, fix=error.fix
             ) from None
     else:
+        require_bayesian_run(channel, "pass --classical-only")
         fit = fit_noise(
             channel,
             terms=terms,
@@ -149,14 +160,15 @@ def run(args) -> int:
             progress=progress(args),
         )
         classical = fit.classical
-    result = noise_result(fit or channel, classical, window, fit.fit if fit else None)
+    result = noise_result(fit or channel, classical, window, fit)
     result["notes"] = window.pop("notes", []) + result["notes"]
+    if result.get("bayesian"):
+        result["notes"] += walker_note(result["bayesian"].get("diagnostics", {}), args.walkers)
     if args.json:
         write_json(args.json, result)
     exported = write_exports(exports, result)
     if folder is not None:
-        folder.mkdir(exist_ok=True)
-        stem = f"noise_{name}"
+        stem = f"noise_{file_stem(name)}"
         if fit is not None:
             write_netcdf(fit.posterior, folder / f"{stem}_posterior.nc")
         write_json(folder / f"{stem}.json", result)

@@ -6,18 +6,23 @@ from pathlib import Path
 from ._arguments import (
     add_recording_arguments,
     confidence,
+    declare_outputs,
+    grid_options,
     health_exit,
     load,
-    output_folder,
-    positive_float,
-    positive_int,
+    max_steps,
+    minutes,
     progress,
+    require_bayesian_run,
     seed,
     taus,
+    unit_and_scale,
+    walker_note,
+    walkers,
     window,
 )
 
-DEFAULT_TERMS = "white,bias_instability,rate_random_walk"
+DEFAULT_TERMS = "auto"
 
 
 def add_parser(commands) -> None:
@@ -47,8 +52,8 @@ def add_parser(commands) -> None:
         help=f"noise terms (as for noise; default {DEFAULT_TERMS})",
     )
     report.add_argument("--seed", type=seed, default=0)
-    report.add_argument("--walkers", type=positive_int, default=32)
-    report.add_argument("--max-steps", type=positive_int, default=40_000)
+    report.add_argument("--walkers", type=walkers, default=32)
+    report.add_argument("--max-steps", type=max_steps, default=40_000)
     report.add_argument("--quiet", action="store_true", help="no progress bar")
     report.add_argument(
         "--discover",
@@ -69,7 +74,7 @@ def add_parser(commands) -> None:
     demo.add_argument("--seed", type=seed, default=0, help="seed of the simulation and the fit")
     demo.add_argument(
         "--minutes",
-        type=positive_float,
+        type=minutes,
         default=25.0,
         help="length of the simulated recording (default 25)",
     )
@@ -80,7 +85,7 @@ def add_parser(commands) -> None:
 def _health(outcome, command: str) -> int:
     return health_exit(
         command,
-        [f"{a.channel}: {', '.join(a.fit.diagnostics.failures)}" for a in outcome.failed],
+        [f"{a.channel}: {', '.join(a.failures)}" for a in outcome.failed],
     )
 
 
@@ -89,7 +94,7 @@ def run(args) -> int:
     from ..report._discovery import discovery_findings
     from ..report._report import report_recording, summary_text
 
-    folder = output_folder(args.out)
+    (folder,) = declare_outputs([args.file], folders={"--out": args.out})
     recording = load(args)
     channels = (
         [part.strip() for part in args.channels.split(",") if part.strip()]
@@ -97,6 +102,9 @@ def run(args) -> int:
         else default_channels(recording)
     )
     start, stop, described = window(args, recording)
+    for name in dict.fromkeys(channels):
+        options = grid_options(args, name)
+        require_bayesian_run(recording.channel(name, start=start, stop=stop, **options))
     discoveries = None
     if args.discover:
 
@@ -122,12 +130,20 @@ def run(args) -> int:
         gaps=args.gaps,
         start=start,
         stop=stop,
+        options={
+            name: dict(zip(("unit", "scale"), unit_and_scale(args, name), strict=True))
+            for name in channels
+        },
         window=described,
         discoveries=discoveries,
         progress=progress(args),
     )
     print(f"bayescal report: {recording.source}")
     print(summary_text(outcome))
+    for analysis in outcome.analyses:
+        diagnostics = (analysis.result.get("bayesian") or {}).get("diagnostics", {})
+        for note in walker_note(diagnostics, args.walkers):
+            print(f"  note: {analysis.channel}: {note}")
     return _health(outcome, "report")
 
 
@@ -135,7 +151,7 @@ def run_demo(args) -> int:
     from ..report._demo import write_demo
     from ..report._report import summary_text
 
-    folder = output_folder(args.out)
+    (folder,) = declare_outputs(folders={"--out": args.out})
     csv_path, outcome = write_demo(
         folder, seed=args.seed, minutes=args.minutes, progress=progress(args)
     )

@@ -9,11 +9,16 @@ from .._errors import InputError
 from ._arguments import (
     add_recording_arguments,
     confidence,
+    declare_outputs,
+    finite_float,
     grid_options,
     health_exit,
+    latitude,
     load,
     progress,
+    require_bayesian_run,
     seed,
+    unit_and_scale,
 )
 
 NOISE_TERMS = "white,bias_instability,rate_random_walk"
@@ -32,7 +37,7 @@ def add_parser(commands) -> None:
     fit.add_argument("--degree", default="auto", help="polynomial degree, or auto (default)")
     fit.add_argument(
         "--reference",
-        type=float,
+        type=finite_float,
         metavar="T0",
         help="reference temperature (default: the middle of the range)",
     )
@@ -42,7 +47,7 @@ def add_parser(commands) -> None:
         help="noise terms beside the thermal bias (as for noise; no ramp)",
     )
     fit.add_argument(
-        "--latitude", type=float, metavar="DEG", help="take the Earth rate off (with --axis)"
+        "--latitude", type=latitude, metavar="DEG", help="take the Earth rate off (with --axis)"
     )
     fit.add_argument(
         "--axis",
@@ -78,7 +83,7 @@ def add_parser(commands) -> None:
         "(about that much at T0, each polynomial term about that much at the edge of the "
         "calibrated range); auto (default) learns it from the data, 0 assumes no change",
     )
-    update.add_argument("--latitude", type=float, metavar="DEG")
+    update.add_argument("--latitude", type=latitude, metavar="DEG")
     update.add_argument("--axis", default="up")
     update.add_argument("--seed", type=seed, default=0)
     update.add_argument("--quiet", action="store_true")
@@ -92,15 +97,38 @@ def add_parser(commands) -> None:
     compensate.set_defaults(run=run_compensate)
 
 
+def temperature_unit(recording, column: str) -> tuple[str, bool]:
+    """The unit of the temperature column (from its header or name; degC when neither says)
+    and whether the file declares it."""
+    from ..recording._units import parse_unit, unit_from_column_suffix
+
+    declared = recording.header_units.get(column) or unit_from_column_suffix(column)
+    if declared is None:
+        return "degC", False
+    parsed = parse_unit(declared)
+    if parsed.quantity != "temperature":
+        raise InputError(
+            f"the temperature column's unit '{declared}' is not a temperature unit",
+            source=recording.source,
+            column=column,
+            fix="write degC, degF or K in its header, e.g. temperature[degC]",
+        )
+    return parsed.name, True
+
+
 def _channel(args):
-    """The gyro channel with its temperature on its grid, and the temperature column."""
+    """The gyro channel with its temperature on its grid, the temperature column and its
+    unit."""
     from ..recording._columns import find_temperature_column
 
     if not args.channel:
         raise InputError("--channel is required", fix="name the gyro column, e.g. --channel gyro_z")
     recording = load(args)
     column = find_temperature_column(recording, args.temperature)
-    return recording.channel(args.channel, temperature=column, **grid_options(args)), column
+    channel = recording.channel(
+        args.channel, temperature=column, **grid_options(args, args.channel)
+    )
+    return channel, column, temperature_unit(recording, column)[0]
 
 
 def _degree(text: str) -> int | str:
@@ -116,11 +144,10 @@ def _degree(text: str) -> int | str:
 
 
 def run_fit(args) -> int:
-    from .._output import check_writable
-
-    check_writable(args.json, "--json")
+    declare_outputs([args.file], {"--json": args.json})
     degree = _degree(args.degree)
-    channel, column = _channel(args)
+    channel, column, temperature_in = _channel(args)
+    require_bayesian_run(channel)
     # The analysis's modules load once the input is known to be good.
     from ..capabilities._thermal import fit_thermal
     from ..report._thermal import thermal_text
@@ -133,6 +160,7 @@ def run_fit(args) -> int:
         reference=args.reference,
         terms=args.terms,
         unit=channel.unit,
+        temperature_unit=temperature_in,
         channel=channel.channel,
         latitude=args.latitude,
         axis=args.axis,
@@ -227,16 +255,20 @@ def _same_earth_rate(args, calibration, unit: str) -> None:
 
 
 def run_update(args) -> int:
-    from .._output import check_writable
-
-    check_writable(args.json, "--json")
+    declare_outputs([args.file, args.calibration], {"--json": args.json})
     drift = _parse_drift(args.drift)
-    channel, _ = _channel(args)
+    channel, _, temperature_in = _channel(args)
+    require_bayesian_run(channel)
     # The analysis's modules load once the input is known to be good.
     from ..capabilities._thermal import load_thermal_calibration
     from ..report._thermal import thermal_text
 
-    calibration = load_thermal_calibration(args.calibration, unit=channel.unit)
+    calibration = load_thermal_calibration(
+        args.calibration,
+        unit=channel.unit,
+        channel=channel.channel,
+        temperature_unit=temperature_in,
+    )
     if args.latitude is not None:
         _same_earth_rate(args, calibration, channel.unit)
     periods = _periods(channel, args.periods)
@@ -257,44 +289,63 @@ def run_update(args) -> int:
 
 
 def run_compensate(args) -> int:
-    from pathlib import Path
-
     from .._output import write_csv
     from ..capabilities._thermal import load_thermal_calibration
     from ..recording._columns import find_temperature_column
     from ..recording._recording import resolve_unit
 
-    recording = load(args)
-    column = find_temperature_column(recording, args.temperature)
-    out = Path(args.out)
-    if not out.parent.is_dir():
-        raise InputError(f"--out {out}: folder '{out.parent}' does not exist")
+    declare_outputs([args.file, args.calibration], {"--out": args.out})
     if not args.channel:
         raise InputError("--channel is required", fix="name the gyro column, e.g. --channel gyro_z")
+    recording = load(args)
+    column = find_temperature_column(recording, args.temperature)
+    if column == args.channel:
+        raise InputError(
+            f"--temperature {column} names the compensated channel",
+            source=recording.source,
+            fix="name the temperature column",
+        )
+    unit, factor = unit_and_scale(args, args.channel)
     values = recording.require(args.channel, "channel")
-    unit, note = resolve_unit(recording, args.channel, args.unit)
-    calibration = load_thermal_calibration(args.calibration, unit=unit)
+    if factor is not None:
+        values = values * factor
+    unit, note = resolve_unit(recording, args.channel, unit)
+    calibration = load_thermal_calibration(
+        args.calibration,
+        unit=unit,
+        channel=args.channel,
+        temperature_unit=temperature_unit(recording, column)[0],
+    )
     temperature = recording.require(column, "temperature column")
     compensated, spread = calibration.compensate(values, temperature)
+    warnings = [note] if note else []
+    missing = ~(np.isfinite(values) & np.isfinite(temperature))
+    if missing.any():
+        first = int(np.flatnonzero(missing)[0]) + 1 + recording.row_offset
+        warnings.append(
+            f"{int(missing.sum())} row(s) lack the channel or the temperature (first: data row "
+            f"{first}): their compensated value is left empty"
+        )
     outside = calibration.outside_range(temperature)
     if outside.any():
         low, high = calibration.temperature_range
         distance = float(np.max(np.maximum(low - temperature, temperature - high)[outside]))
-        print(
-            f"bayescal thermal compensate: warning: {int(outside.sum())} samples "
-            f"({100 * outside.mean():.3g}%) lie outside the calibrated range [{low:.4g}, "
-            f"{high:.4g}] {calibration.temperature_unit}, by up to {distance:.3g}: the "
-            "polynomial is extrapolated there",
-            file=sys.stderr,
+        warnings.append(
+            f"{int(outside.sum())} samples ({100 * outside.mean():.3g}%) lie outside the "
+            f"calibrated range [{low:.4g}, {high:.4g}] {calibration.temperature_unit}, by up to "
+            f"{distance:.3g}: the polynomial is extrapolated there"
         )
-    columns = dict(recording.columns)
-    columns[f"{args.channel}_compensated"] = compensated
-    columns[f"{args.channel}_compensated_sd"] = spread
-    write_csv(out, columns)
-    if note:
-        print(f"bayescal thermal compensate: note: {note}", file=sys.stderr)
+    columns = list(recording.file_columns or recording.columns.items())
+    columns += [
+        (f"{args.channel}_compensated", compensated),
+        (f"{args.channel}_compensated_sd", spread),
+    ]
+    write_csv(args.out, columns)
+    for line in [*recording.notes, *warnings]:
+        print(f"bayescal thermal compensate: note: {line}", file=sys.stderr)
     print(
-        f"bayescal thermal compensate: wrote {out} ({values.size} rows; {args.channel} minus "
-        f"the thermal bias of {args.calibration}, with its sd)"
+        f"bayescal thermal compensate: wrote {args.out} ({values.size} rows, every column of "
+        f"the recording; {args.channel} minus the thermal bias of {args.calibration}, with "
+        "its sd)"
     )
     return 0

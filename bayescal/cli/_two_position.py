@@ -1,17 +1,23 @@
 """``bayescal two-position``: scale and offset of one accelerometer axis from an up and a down
 section."""
 
+import math
+
 import numpy as np
 
 from .._errors import InputError
 from ._arguments import (
     add_recording_arguments,
     confidence,
+    declare_outputs,
     gravity,
     grid_options,
     health_exit,
+    height,
+    latitude,
     load,
     progress,
+    require_acceleration,
     seed,
 )
 
@@ -31,8 +37,8 @@ def add_parser(commands) -> None:
         metavar="U0:U1,D0:D1",
         help="up and down sections of FILE in seconds (default: found)",
     )
-    parser.add_argument("--latitude", type=float, metavar="DEG", help="geodetic latitude")
-    parser.add_argument("--height", type=float, metavar="M", help="height above the ellipsoid")
+    parser.add_argument("--latitude", type=latitude, metavar="DEG", help="geodetic latitude")
+    parser.add_argument("--height", type=height, metavar="M", help="height above the ellipsoid")
     parser.add_argument("--g-local", metavar="VALUE[±U]", help="local gravity in m/s^2 instead")
     parser.add_argument("--confidence", type=confidence, default=0.95)
     parser.add_argument(
@@ -57,7 +63,8 @@ def _sections(args):
         raise InputError("give one FILE or --up and --down, not both")
     if args.file:
         recording = load(args)
-        channel = recording.channel(args.channel, **grid_options(args))
+        channel = recording.channel(args.channel, at_rest=False, **grid_options(args, args.channel))
+        require_acceleration(channel, "two-position")
         columns = find_accelerometer_columns(recording)
         still_on = None
         if (
@@ -75,9 +82,10 @@ def _sections(args):
             fix="give --up FILE and --down FILE, or one FILE holding both",
         )
     up_channel, down_channel = (
-        load(args, path).channel(args.channel, **grid_options(args))
+        load(args, path).channel(args.channel, **grid_options(args, args.channel))
         for path in (args.up, args.down)
     )
+    require_acceleration(up_channel, "two-position")
     if (
         abs(up_channel.rate_hz / down_channel.rate_hz - 1) > 0.01
         or up_channel.unit != down_channel.unit
@@ -94,15 +102,39 @@ def _sections(args):
     return up, down, "--up and --down files", None, up_channel
 
 
+def check_sections(text: str | None) -> None:
+    """``--sections U0:U1,D0:D1``: two windows in seconds, each ending after it starts."""
+    if text is None:
+        return
+    parts = text.split(",")
+    for part in parts:
+        try:
+            start, stop = (float(x) for x in part.split(":"))
+        except ValueError:
+            start = stop = math.nan
+        if not (math.isfinite(start) and math.isfinite(stop)):
+            raise InputError(
+                f"--sections {text!r}: cannot read {part.strip()!r}",
+                fix="write U0:U1,D0:D1 in seconds from the first sample",
+            )
+        if not stop > start:
+            raise InputError(f"--sections: {part.strip()} ends before it starts")
+    if len(parts) != 2:
+        raise InputError(
+            f"--sections {text!r} gives {len(parts)} section(s)",
+            fix="give two: the up and the down section, U0:U1,D0:D1",
+        )
+
+
 def run(args) -> int:
-    from .._output import check_writable, write_json
+    from .._output import write_json
     from ..models._terms import parse_terms
 
     if not args.channel:
         raise InputError("--channel is required", fix="name the accelerometer column, e.g. acc_z")
     parse_terms(args.terms)
-    if args.json:
-        check_writable(args.json, "--json")
+    check_sections(args.sections)
+    declare_outputs([args.file, args.up, args.down], {"--json": args.json})
     local = gravity(args.latitude, args.height, args.g_local)
     up, down, found_by, gap_s, channel = _sections(args)
     # The analysis's modules load once the input is known to be good.
@@ -127,5 +159,5 @@ def run(args) -> int:
     if args.json:
         write_json(args.json, result)
     print(two_position_text(result))
-    failures = [] if calibration.passed else list(calibration.bayesian.noise.diagnostics.failures)
+    failures = list(calibration.failures)
     return health_exit("two-position", failures)

@@ -20,9 +20,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
-from ..models._components import component_weights
-from ..models._noise_model import NoiseModel
-from ._noise_posterior import NoisePosterior
+from ..models._whittle import expected_power
+from ._noise_posterior import NoisePosterior, noise_model
 
 BAND_LEVEL = 0.90
 BAND_DRAWS = 400
@@ -38,13 +37,18 @@ def draw_subset(fit: NoisePosterior, count: int, seed: int) -> dict[str, np.ndar
     return {name: value[index] for name, value in flat.items()}
 
 
-def model_allan_deviation(draws: dict[str, np.ndarray], rate_hz: float, tau) -> np.ndarray:
-    """(draws, taus): the exact Allan deviation of the noise model for each posterior draw."""
-    model = NoiseModel(
-        rate_hz=float(rate_hz),
-        **{name: jnp.asarray(draws[name])[:, None] for name in _NOISE_PARAMETERS if name in draws},
-    )
-    variance = np.asarray(model.allan_variance(jnp.asarray(tau, dtype=float)[None, :]))
+def model_allan_deviation(fit: NoisePosterior, draws: dict[str, np.ndarray], tau) -> np.ndarray:
+    """(draws, taus): the exact Allan deviation of the noise model for each posterior draw
+    (all draws at once; one by one through a low-pass filter, whose shape is numbers)."""
+    tau = np.asarray(tau, dtype=float)
+    if fit.problem.shape is not None:
+        variance = np.stack([np.asarray(m.allan_variance(tau)) for m in fit.models(draws)])
+    else:
+        batch = {
+            name: jnp.asarray(draws[name])[:, None] for name in _NOISE_PARAMETERS if name in draws
+        }
+        model = noise_model(fit.problem, batch)
+        variance = np.asarray(model.allan_variance(jnp.asarray(tau)[None, :]))
     return np.sqrt(np.maximum(variance, 0.0))
 
 
@@ -63,14 +67,13 @@ def allan_band(
     draw's exact Allan variance times chi-square(edf) / edf, edf as for the classical bars).
     """
     sample = draw_subset(fit, draws, seed)
-    rate = fit.problem.spectral.rate_hz
     tau = np.asarray(allan.tau, dtype=float)
     usable = np.isfinite(allan.deviation) & (tau > 0)
     tau = tau[usable]
     low_q, high_q = (1 - level) / 2, (1 + level) / 2
     fine = np.geomspace(tau.min(), tau.max(), 80) if tau.size else tau
-    expected_fine = model_allan_deviation(sample, rate, fine)
-    expected = model_allan_deviation(sample, rate, tau)
+    expected_fine = model_allan_deviation(fit, sample, fine)
+    expected = model_allan_deviation(fit, sample, tau)
     edf = np.asarray(allan.edf, dtype=float)[usable]
     fallback = np.maximum(np.asarray(allan.n, dtype=float)[usable], 1.0)
     edf = np.where(np.isfinite(edf) & (edf > 0), edf, fallback)
@@ -101,20 +104,24 @@ def spectrum_band(
     spectral = fit.problem.spectral
     rate = spectral.rate_hz
     sample = draw_subset(fit, draws, seed)
-    weights = np.asarray(
-        component_weights(
-            **{name: sample[name] for name in ("N", "B", "K", "Q", "F") if name in sample}
-        )
-    )
-    expected = weights @ np.asarray(spectral.basis)[:, 0, :]  # (draws, bins)
     count = np.asarray(spectral.count, dtype=float)
+    nodes = spectral.node_frequency
+    expected = (
+        np.stack(  # (draws, bins): the mean expected periodogram over each bin
+            [
+                expected_power(spectral, *model.whittle_weights(nodes))
+                for model in fit.models(sample)
+            ]
+        )
+        / count
+    )
     effective = count * np.asarray(spectral.weight, dtype=float)
     rng = np.random.default_rng(seed + 2)
     predictive = expected * rng.gamma(effective, 1.0 / effective, size=expected.shape)
     frequency = np.asarray(spectral.frequency_hz, dtype=float)
     # Periodogram of the increments -> pseudo-PSD of the samples, per Hz, two-sided.
     to_samples = 1.0 / (4 * np.sin(np.pi * frequency / rate) ** 2 * rate)
-    measured = np.asarray(spectral.moment0, dtype=float) / count
+    measured = np.asarray(spectral.power, dtype=float) / count
     order = np.argsort(frequency, kind="stable")
     low_q, high_q = (1 - level) / 2, (1 + level) / 2
 

@@ -40,20 +40,19 @@ def _bonferroni(p_values) -> tuple[float, int]:
     return float(min(1.0, p_values[worst] * np.count_nonzero(np.isfinite(p_values)))), worst
 
 
-def _dominant_exponent(fit: ModelFit, tau, rate_hz: float) -> list[int]:
+def dominant_exponent(noise: dict, tau, gauss_markov_s: float = 0.0) -> list[int]:
     """Power-law exponent alpha of S_y(f) of the model term with the largest Allan variance at
     each tau (a Gauss-Markov term counts as a random walk below its time constant, as white
-    noise above it)."""
-    noise = fit.noise
+    noise above it). ``noise``: the model's N, B, K, Q, R (and G, the Gauss-Markov sigma)."""
     terms = [
-        (2, 3 * noise["Q"] ** 2 / tau**2),
+        (2, 3 * noise.get("Q", 0.0) ** 2 / tau**2),
         (0, noise["N"] ** 2 / tau),
-        (-1, 2 * math.log(2) / math.pi * noise["B"] ** 2 + 0 * tau),
-        (-2, noise["K"] ** 2 * tau / 3 + noise["R"] ** 2 * tau**2 / 2),
+        (-1, 2 * math.log(2) / math.pi * noise.get("B", 0.0) ** 2 + 0 * tau),
+        (-2, noise.get("K", 0.0) ** 2 * tau / 3 + noise.get("R", 0.0) ** 2 * tau**2 / 2),
     ]
-    if noise["G"] > 0:
-        variance = GaussMarkov(fit.spec.gauss_markov_s).allan_variance(tau, noise["G"])
-        below = tau < fit.spec.gauss_markov_s
+    if noise.get("G", 0.0) > 0:
+        variance = GaussMarkov(gauss_markov_s).allan_variance(tau, noise["G"])
+        below = tau < gauss_markov_s
         terms.append((-2, np.where(below, variance, 0.0)))
         terms.append((0, np.where(below, 0.0, variance)))
     exponents = np.array([alpha for alpha, _ in terms])
@@ -61,20 +60,22 @@ def _dominant_exponent(fit: ModelFit, tau, rate_hz: float) -> list[int]:
     return exponents[np.argmax(values, axis=0)].tolist()
 
 
-def _allan_check(fit: ModelFit, rate_hz: float, unit: str) -> dict:
-    allan = allan_deviation(fit.residual, rate_hz, "octave")
+def allan_check(residual, rate_hz: float, unit: str, model_variance, exponents) -> dict:
+    """The measured overlapping Allan deviation of ``residual`` against the model's band:
+    ``model_variance(tau)`` its Allan variance, ``exponents(tau)`` the noise type it says
+    dominates at each tau. The band is the model's: its EDF for that noise type, not for a type
+    identified from the data (unreliable from a few long averages)."""
+    allan = allan_deviation(residual, rate_hz, "octave")
     usable = np.isfinite(allan.deviation)
     tau, deviation = allan.tau[usable], allan.deviation[usable]
-    predicted = model_allan_variance(fit, tau, rate_hz)
-    # The band is the model's: its EDF for the noise type the model says dominates at each
-    # tau, not for a type identified from the data (unreliable from a few long averages).
-    n_phase = int(np.count_nonzero(np.isfinite(fit.residual))) + 1
+    predicted = model_variance(tau)
+    n_phase = int(np.count_nonzero(np.isfinite(residual))) + 1
     edf = np.array(
         [
             equivalent_degrees_of_freedom(
                 alpha, 2, int(m), n_phase, overlapping=True, modified=False
             )
-            for alpha, m in zip(_dominant_exponent(fit, tau, rate_hz), allan.m[usable], strict=True)
+            for alpha, m in zip(exponents(tau), allan.m[usable], strict=True)
         ]
     )
     ratio = deviation**2 / predicted
@@ -104,9 +105,22 @@ def _allan_check(fit: ModelFit, rate_hz: float, unit: str) -> dict:
     }
 
 
-def _spectrum_check(fit: ModelFit) -> dict:
-    summary = fit.design.summary
-    ratio, _ = bin_ratios(fit)
+def _allan_check(fit: ModelFit, rate_hz: float, unit: str) -> dict:
+    return allan_check(
+        fit.residual,
+        rate_hz,
+        unit,
+        lambda tau: model_allan_variance(fit, tau, rate_hz),
+        lambda tau: dominant_exponent(fit.noise, tau, fit.spec.gauss_markov_s),
+    )
+
+
+def spectrum_check(summary, ratio: np.ndarray, expected: np.ndarray) -> dict:
+    """The binned periodogram against the model's expected one in octave bands: ``ratio`` is
+    each bin's sum of I / S, ``expected`` each bin's mean S. Each band's weighted sum of the
+    ratios is Gamma-distributed under the model (the test); the band's measured power over
+    the model's (the size of a departure, what the message reports) weighs the bins by their
+    power, so a band holding a filter's null is not judged by the null alone."""
     weight = summary.weight
     frequency = summary.frequency_hz
     octave = np.floor(np.log2(frequency / frequency.min())).astype(int)
@@ -117,8 +131,10 @@ def _spectrum_check(fit: ModelFit) -> dict:
         observed = float(np.sum(ratio[members] * weight[members]))
         lower = stats.gamma.cdf(observed, shape)
         p_each.append(2 * min(lower, 1 - lower))
+        model_power = summary.count[members] * expected[members]
+        power_ratio = float(np.sum(ratio[members] * expected[members]) / np.sum(model_power))
         bands.append(
-            (float(frequency[members].min()), float(frequency[members].max()), observed / shape)
+            (float(frequency[members].min()), float(frequency[members].max()), power_ratio)
         )
     p_value, worst = _bonferroni(p_each)
     low, high, power_ratio = bands[worst]
@@ -127,7 +143,15 @@ def _spectrum_check(fit: ModelFit) -> dict:
         "statistic": float(abs(math.log(power_ratio))),
         "p_value": p_value,
         "location": {"frequency_hz": [low, high], "power_over_model": power_ratio},
+        "bands": [
+            {"frequency_hz": [lo, hi], "power_over_model": r, "p_value": float(p)}
+            for (lo, hi, r), p in zip(bands, p_each, strict=True)
+        ],
     }
+
+
+def _spectrum_check(fit: ModelFit) -> dict:
+    return spectrum_check(fit.design.summary, *bin_ratios(fit))
 
 
 def line_search(fit: ModelFit, rate_hz: float) -> tuple[float, float, int]:
@@ -270,9 +294,11 @@ def _tail_check(values: np.ndarray, rate_hz: float) -> dict:
 
 
 def _levels_check(fit: ModelFit, rate_hz: float, unit: str) -> dict:
+    """Samples on a grid the model does not know of (a model with the grid's rounding floor,
+    :attr:`ModelFit.lsb`, knows it)."""
     step = discrete_step(fit.clean)
     white_sd = fit.noise["N"] * math.sqrt(rate_hz)
-    material = step > 0 and step > 0.5 * white_sd
+    material = step > 0 and step > 0.5 * white_sd and fit.lsb != step
     return {
         "name": "discrete_levels",
         "statistic": step / white_sd if white_sd > 0 else 0.0,
@@ -320,3 +346,113 @@ def run_checks(fit: ModelFit, data) -> list[dict]:
     for check in checks:
         check["passed"] = bool(check["p_value"] >= CHECK_LEVEL)
     return checks
+
+
+# --- the checks of a fitted noise model ---------------------------------------------------
+
+ADEV_TOLERANCE = 0.10
+"""A fitted noise model misfits where the measured Allan deviation departs from the model's by
+more than this fraction (and significantly): smaller departures are below what matters for
+the parameters a user reads (N, B, K to 10 %), and every long real record shows some."""
+POWER_TOLERANCE = 0.20
+"""Likewise for the power in an octave band of the spectrum (ADEV ~ sqrt(power): 10 %)."""
+LAG_ONE_TOLERANCE = 0.05
+"""Likewise for the lag-1 autocorrelation of the increments (white noise: -0.5)."""
+
+
+def lag_one_check(values, autocovariance: np.ndarray) -> dict:
+    """The lag-1 autocorrelation of the increments of ``values`` (runs between gaps) against
+    the model's, ``autocovariance`` its increments' autocovariance at lags 0, 1, 2 ...;
+    standard error by Bartlett's formula from the model's autocorrelations."""
+    values = np.asarray(values, dtype=float)
+    present = np.isfinite(values)
+    increments = np.diff(values)
+    both = present[1:] & present[:-1]
+    centred = np.where(both, increments - np.mean(increments[both]), 0.0)
+    pairs = both[1:] & both[:-1]
+    observed = float(np.sum(centred[1:] * centred[:-1] * pairs) / np.sum(centred[both] ** 2))
+    rho = np.asarray(autocovariance, dtype=float) / autocovariance[0]
+    predicted = float(rho[1])
+    lags = np.arange(1, rho.size - 1)
+    extended = np.concatenate((rho, [0.0]))
+    variance = (
+        np.sum((extended[lags + 1] + extended[lags - 1] - 2 * predicted * extended[lags]) ** 2)
+        + (rho[1] * 2 - 2 * predicted * rho[0]) ** 2 / 2
+    )
+    standard_error = math.sqrt(max(variance, 1e-12) / max(int(np.sum(pairs)), 1))
+    z = (observed - predicted) / standard_error
+    return {
+        "name": "lag_one_autocorrelation",
+        "statistic": abs(z),
+        "p_value": float(2 * stats.norm.sf(abs(z))),
+        "location": {"increments_lag_one": observed, "model": predicted},
+    }
+
+
+def noise_model_checks(model, summary, values, unit: str) -> list[dict]:
+    """The checks of a fitted stationary noise model (a :class:`~bayescal.NoiseModel` at the
+    posterior's MAP) against its record: the Allan deviation within the model's predictive
+    band, the spectrum in octave bands, the increments' lag-1 autocorrelation. Each says where
+    it failed and by how much; a check fails only where the departure is both significant
+    (Bonferroni p < CHECK_LEVEL) and material (beyond the tolerances above): a model that fits
+    a long record to a few percent is a model that fits."""
+    from ..models._whittle import expected_power
+
+    expected = np.asarray(expected_power(summary, *model.whittle_weights(summary.node_frequency)))
+    expected = expected / summary.count
+    ratio = summary.power / expected
+    noise = {"N": model.N, "B": model.B, "K": model.K, "Q": model.Q, "R": model.R}
+    autocovariance = model.increment_autocovariance(np.arange(64))
+    checks = [
+        allan_check(
+            values,
+            model.rate_hz,
+            unit,
+            lambda tau: np.asarray(model.allan_variance(tau)),
+            lambda tau: dominant_exponent(noise, tau),
+        ),
+        spectrum_check(summary, ratio, expected),
+        lag_one_check(values, autocovariance),
+    ]
+    for check in checks:
+        material = _material(check)
+        check["passed"] = bool(check["p_value"] >= CHECK_LEVEL or not material)
+        check["misfit"] = "" if check["passed"] else material
+    return checks
+
+
+def posterior_checks(posterior, values, unit: str) -> list[dict]:
+    """:func:`noise_model_checks` of a noise posterior (:class:`NoisePosterior`) at its MAP,
+    against the values it was fitted to."""
+    return noise_model_checks(posterior.model_at_map(), posterior.problem.spectral, values, unit)
+
+
+def _material(check: dict) -> str:
+    """How the check's worst place departs from the model beyond the tolerance, in words
+    (empty where it does not)."""
+    location = check["location"]
+    match check["name"]:
+        case "allan_deviation":
+            ratio = location["adev_over_model"]
+            if abs(ratio - 1) <= ADEV_TOLERANCE:
+                return ""
+            where = location.get("tau_range_s", [location["tau_s"]] * 2)
+            return (
+                f"the measured Allan deviation is {ratio:.2f}x the model's at tau = "
+                f"{location['tau_s']:.3g} s (departing over {where[0]:.3g}-{where[1]:.3g} s)"
+            )
+        case "spectrum_bands":
+            ratio = location["power_over_model"]
+            if abs(ratio - 1) <= POWER_TOLERANCE:
+                return ""
+            low, high = location["frequency_hz"]
+            return f"the power in the band {low:.3g}-{high:.3g} Hz is {ratio:.2f}x the model's"
+        case "lag_one_autocorrelation":
+            observed, predicted = location["increments_lag_one"], location["model"]
+            if abs(observed - predicted) <= LAG_ONE_TOLERANCE:
+                return ""
+            return (
+                f"the increments' lag-1 autocorrelation is {observed:+.3f}, the model's "
+                f"{predicted:+.3f}"
+            )
+    return ""

@@ -25,7 +25,7 @@ def noise_datatree(fit: NoisePosterior, unit: str, *, channel: str, source: str)
             "sample_stats": {"lp": fit.log_posterior},
             "log_likelihood": {"whittle": fit.pointwise_log_likelihood},
             "observed_data": {
-                "periodogram_mean": spectral.moment0 / spectral.count,
+                "periodogram_mean": spectral.power / spectral.count,
                 "frequencies_per_bin": spectral.count,
                 "mean_increment": spectral.mean_increment,
                 "block_mean": level.block_mean,

@@ -11,7 +11,9 @@ import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from ..models._level import bias_given_noise
+from ..models._noise_model import NoiseModel
 from ..models._noise_problem import NoiseProblem
+from ..models.effects.output_filter import OutputFilter
 from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
 from ._optimize import Mode, maximum_a_posteriori
 
@@ -20,8 +22,31 @@ def noise_mode(problem: NoiseProblem) -> Mode:
     """The MAP from two starts — the prior centres (the Allan bounds) and a point well below
     them, where the terms a record does not hold sit."""
     base = jnp.asarray(problem.prior.location)
-    lowered = base - 3.0 * jnp.array([p != "R" for p in problem.parameters])
+    lowered = base - 3.0 * jnp.array([p in ("N", "B", "K", "Q", "F") for p in problem.parameters])
     return maximum_a_posteriori(NoiseProblem.log_posterior, problem, (base, lowered))
+
+
+def noise_model(problem: NoiseProblem, values: dict) -> NoiseModel:
+    """The :class:`NoiseModel` of ``problem`` at parameter ``values`` (natural units; arrays
+    broadcast, except a low-pass filter's, which are numbers), with the record's LSB."""
+    noise = {name: values[name] for name in ("N", "B", "K", "Q", "R", "F") if name in values}
+    lowpass = None
+    if problem.shape == "decimation":
+        lowpass = OutputFilter(
+            shape="decimation",
+            length=float(values["filter_length"]),
+            stages=float(values["filter_stages"]),
+        )
+    elif problem.shape == "butterworth":
+        lowpass = OutputFilter(
+            shape="butterworth",
+            cutoff_hz=float(values["filter_cutoff"]),
+            order=float(values["filter_order"]),
+            warping=float(values["filter_warping"]),
+        )
+    return NoiseModel(
+        rate_hz=problem.spectral.rate_hz, **noise, lowpass=lowpass, lsb=float(problem.lsb)
+    )
 
 
 class ParameterSummary(eqx.Module):
@@ -51,6 +76,16 @@ class NoisePosterior(eqx.Module):
     problem: NoiseProblem
     terms: tuple[str, ...] = eqx.field(static=True)
     seed: int = eqx.field(static=True)
+
+    def model_at_map(self) -> NoiseModel:
+        """The noise model at the MAP."""
+        return noise_model(self.problem, {n: s.map for n, s in self.parameters.items()})
+
+    def models(self, draws: dict):
+        """The noise model of each of ``draws`` (name -> flat array of draws), one by one."""
+        count = next(iter(draws.values())).size
+        for index in range(count):
+            yield noise_model(self.problem, {n: float(v[index]) for n, v in draws.items()})
 
 
 @eqx.filter_jit
@@ -99,7 +134,7 @@ def sample_noise(
         problem, jnp.asarray(kept), jax.random.PRNGKey(int(rng.integers(2**31)))
     )
     natural = {name: np.asarray(value) for name, value in natural.items()}
-    map_values, map_sd = _map_summary(problem, estimate)
+    map_values, map_sd = map_summary(problem, estimate)
     summaries = {
         name: ParameterSummary(
             float(np.mean(natural[name])),
@@ -125,15 +160,29 @@ def sample_noise(
     )
 
 
-def _map_summary(problem: NoiseProblem, estimate: Mode) -> tuple[dict, dict]:
+def _slope(name: str, values: dict, rate_hz: float, prior) -> float:
+    """d(value) / d(coordinate) of a parameter at ``values``: the delta method's factor."""
+    if name == "R":
+        return float(prior.ramp_scale)
+    if name == "F":
+        return values["F"] * (1.0 - values["F"])
+    if name == "filter_length":
+        return values[name] - 1.0
+    if name == "filter_cutoff":
+        return values[name] * (1.0 - 2.0 * values[name] / rate_hz)
+    if name == "filter_warping":
+        return values[name] * (1.0 - values[name])
+    return values[name]  # a log coordinate
+
+
+def map_summary(problem: NoiseProblem, estimate: Mode) -> tuple[dict, dict]:
     """MAP values and their Laplace sds (delta method) in the channel's units, the bias
     included (its conditional sd, widened by the ramp's uncertainty when R is fitted)."""
     values = {name: float(v) for name, v in problem.natural(jnp.asarray(estimate.theta)).items()}
     spread = {}
     for i, name in enumerate(problem.parameters):
         sd = math.sqrt(max(estimate.covariance[i, i], 0.0))
-        slope = {"R": float(problem.prior.ramp_scale), "F": 1.0 - values.get("F", 0.0) ** 2}
-        spread[name] = sd * slope.get(name, values[name])
+        spread[name] = sd * _slope(name, values, problem.spectral.rate_hz, problem.prior)
     mean, variance, per_ramp = (
         float(value) for value in _bias_at(problem, jnp.asarray(estimate.theta))
     )

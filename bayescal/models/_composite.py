@@ -17,6 +17,7 @@ information, and cannot see the level of the signal, which is what tells a Gauss
 """
 
 import math
+from functools import partial
 
 import equinox as eqx
 import jax
@@ -24,10 +25,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
-from ._components import SPECTRAL_COMPONENTS, block_covariance_basis, component_weights
+from ._components import block_covariance_basis, component_weights
 from ._noise_model import NoiseModel
 from ._noise_problem import PRIOR_LOG_SD
-from ._whittle import regression_coefficients, whittle_log_likelihood
+from ._whittle import expected_power, regression_coefficients, whittle_log_likelihood
 from .effects._base import Effect, RegressionTerm, SlotTerm
 from .effects._catalogue import CATALOGUE, SEARCHED
 from .effects.bias_instability import BiasInstability
@@ -203,22 +204,46 @@ class Design(eqx.Module):
     mask: np.ndarray
     regressor_mask: np.ndarray
     ramp_scale: np.ndarray
+    floor: np.ndarray
+    """The rounding's known white floor, LSB^2 / (12 fs) (zero off a grid)."""
 
 
-def slot_variances(theta, mask, ramp_scale):
+def summary_components(rate_hz: float, gauss_markov_s: float) -> tuple:
+    """The extra components of a model's spectral summary beyond the noise terms': the
+    Gauss-Markov term at its time constant, then the rounding floor (white, never shaped by
+    the output filter: it comes after it)."""
+    return (
+        partial(GaussMarkov(gauss_markov_s).autocovariance, rate_hz=rate_hz),
+        partial(White.autocovariance, rate_hz=rate_hz),
+    )
+
+
+def shaped(summary, gain: np.ndarray):
+    """``summary`` with the white noise's two components through an output filter of |H|^2
+    ``gain`` at the bins' nodes (3, bins); the mean increment's basis is left as it is (unit
+    gain at zero frequency)."""
+    basis = np.array(summary.basis)
+    basis[:2] = basis[:2] * np.asarray(gain)[None]
+    return eqx.tree_at(lambda s: s.basis, summary, basis)
+
+
+def slot_variances(theta, mask, ramp_scale, floor):
+    """Weights of the summary's components (the noise terms', the Gauss-Markov term's, the
+    rounding floor's) and the ramp, for coordinates ``theta``."""
     on = mask.astype(theta.dtype)
     value = lambda slot: on[slot] * jnp.exp(theta[..., slot])  # noqa: E731
     filter_coefficient = on[6] * jnp.tanh(theta[..., 6])
     weights = component_weights(value(0), value(1), value(2), value(3), filter_coefficient)
     gauss_markov = value(4) ** 2
-    variances = jnp.concatenate((weights, gauss_markov[..., None]), axis=-1)
+    rounding = jnp.broadcast_to(floor, gauss_markov.shape)
+    variances = jnp.concatenate((weights, gauss_markov[..., None], rounding[..., None]), axis=-1)
     return variances, on[5] * theta[..., 5] * ramp_scale
 
 
 def profile(design: Design, theta):
     """Log-likelihood at the best regression coefficients given the noise, the coefficients
     and their precision."""
-    variances, ramp = slot_variances(theta, design.mask, design.ramp_scale)
+    variances, ramp = slot_variances(theta, design.mask, design.ramp_scale, design.floor)
     # Absent regressors are zero columns: a unit ridge pins their coefficients at zero.
     beta, precision = regression_coefficients(
         design.summary, variances, ramp, ridge=1.0 - design.regressor_mask
@@ -281,6 +306,11 @@ class ModelFit(eqx.Module):
     the model has those terms)."""
     design: Design
     hessian: np.ndarray
+    lowpass: OutputFilter | None = None
+    """The output filter shaping the white noise, decided before the search (None: none,
+    or the one-tap F slot)."""
+    lsb: float = 0.0
+    """The grid the samples sit on (zero: none): its rounding floor is in every model."""
 
     @property
     def noise(self) -> dict:
@@ -342,13 +372,13 @@ def level_coefficients(fit_like, values, regressors, rate_hz, theta):
     means, columns, start, stop = level_design(values, regressors, rate_hz)
     time = (start + stop) / 2 / rate_hz
     theta = np.atleast_2d(theta)
-    variances, ramp = slot_variances(jnp.asarray(theta), fit_like.mask, fit_like.ramp_scale)
+    variances, ramp = slot_variances(
+        jnp.asarray(theta), fit_like.mask, fit_like.ramp_scale, fit_like.floor
+    )
     variances, ramp = np.asarray(variances), np.asarray(ramp)
-    basis = block_covariance_basis(start, stop, rate_hz)
-    covariance = np.einsum("dt,tij->dij", variances[:, : len(SPECTRAL_COMPONENTS)], basis)
-    if fit_like.gauss_markov_s > 0:
-        shape = GaussMarkov(fit_like.gauss_markov_s).block_covariance(start, stop, rate_hz)
-        covariance = covariance + variances[:, -1, None, None] * shape
+    covariance = np.einsum(
+        "dt,tij->dij", variances, _block_basis(start, stop, rate_hz, fit_like.gauss_markov_s)
+    )
     design = np.concatenate((np.ones((columns.shape[0], 1)), columns), axis=1)
     factor = np.linalg.cholesky(covariance)
     white_design = np.linalg.solve(factor, np.broadcast_to(design, (theta.shape[0], *design.shape)))
@@ -373,13 +403,42 @@ def above_level_band(summary, duration_s: float) -> np.ndarray:
 class LevelNoise(eqx.Module):
     mask: np.ndarray
     ramp_scale: np.ndarray
+    floor: np.ndarray
     gauss_markov_s: float = eqx.field(static=True)
+
+
+def _block_basis(start, stop, rate_hz: float, gauss_markov_s: float) -> np.ndarray:
+    """(components, blocks, blocks): block-mean covariance per unit weight of every component
+    of :func:`slot_variances` (a Gauss-Markov term's only when the model has one)."""
+    gauss_markov = (
+        GaussMarkov(gauss_markov_s).block_covariance(start, stop, rate_hz)
+        if gauss_markov_s > 0
+        else np.zeros((start.size, start.size))
+    )
+    return np.concatenate(
+        (
+            block_covariance_basis(start, stop, rate_hz),
+            gauss_markov[None],
+            White.block_covariance(start, stop, rate_hz)[None],
+        )
+    )
 
 
 def model_allan_variance(fit: ModelFit, tau, rate_hz: float):
     noise = fit.noise
+    lowpass, coefficient = fit.lowpass, noise["F"]
+    if lowpass is not None and lowpass.shape == "one_tap":  # the noise model's own F
+        lowpass, coefficient = None, lowpass.coefficient
     model = NoiseModel(
-        rate_hz, N=noise["N"], B=noise["B"], K=noise["K"], Q=noise["Q"], R=noise["R"], F=noise["F"]
+        rate_hz,
+        N=noise["N"],
+        B=noise["B"],
+        K=noise["K"],
+        Q=noise["Q"],
+        R=noise["R"],
+        F=coefficient,
+        lowpass=lowpass,
+        lsb=fit.lsb,
     )
     variance = np.asarray(model.allan_variance(tau))
     if noise["G"] > 0:
@@ -388,30 +447,30 @@ def model_allan_variance(fit: ModelFit, tau, rate_hz: float):
 
 
 def bin_ratios(fit: ModelFit) -> tuple[np.ndarray, np.ndarray]:
-    """sum I / S in each frequency bin at the MAP, and the model's expected periodogram."""
-    summary = fit.design.summary
-    variances, _ = slot_variances(jnp.asarray(fit.theta), fit.design.mask, fit.design.ramp_scale)
-    s0 = np.einsum("t,tb->b", np.asarray(variances), summary.basis[:, 0, :])
+    """sum I / S in each frequency bin at the MAP (about the bin's count), and the model's
+    expected periodogram (its mean over the bin)."""
+    summary, design = fit.design.summary, fit.design
+    variances, _ = slot_variances(
+        jnp.asarray(fit.theta), design.mask, design.ramp_scale, design.floor
+    )
+    expected = np.asarray(expected_power(summary, variances)) / summary.count
     beta = np.zeros(MAX_REGRESSORS)
     beta[: fit.beta.size] = fit.beta
-    moment0 = (
-        summary.moment0
-        - 2 * np.einsum("p,pb->b", beta, summary.cross[0])
-        + np.einsum("p,q,pqb->b", beta, beta, summary.gram[0])
+    power = (
+        summary.power
+        - 2 * np.einsum("p,kpb->b", beta, summary.cross)
+        + np.einsum("p,q,kpqb->b", beta, beta, summary.gram)
     )
-    return moment0 / s0, s0
+    return power / expected, expected
 
 
 def block_covariance(fit: ModelFit, start, stop, rate_hz):
-    variances, _ = slot_variances(jnp.asarray(fit.theta), fit.design.mask, fit.design.ramp_scale)
-    variances = np.asarray(variances)
-    basis = block_covariance_basis(start, stop, rate_hz)
-    covariance = np.einsum("t,tij->ij", variances[: len(SPECTRAL_COMPONENTS)], basis)
-    if variances[-1] > 0:
-        covariance += variances[-1] * GaussMarkov(fit.spec.gauss_markov_s).block_covariance(
-            start, stop, rate_hz
-        )
-    return covariance
+    design = fit.design
+    variances, _ = slot_variances(
+        jnp.asarray(fit.theta), design.mask, design.ramp_scale, design.floor
+    )
+    basis = _block_basis(start, stop, rate_hz, fit.spec.gauss_markov_s)
+    return np.einsum("t,tij->ij", np.asarray(variances), basis)
 
 
 def block_means(values, start, stop):

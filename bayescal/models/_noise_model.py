@@ -37,7 +37,7 @@ from ._level import bias_given_noise, level_summary
 from ._whittle import spectral_summary, whittle_log_likelihood
 from .effects.bias_instability import BiasInstability
 from .effects.gauss_markov import GaussMarkov
-from .effects.output_filter import OutputFilter
+from .effects.output_filter import LOWPASS_UNITS, OutputFilter
 from .effects.quantization import Quantization
 from .effects.rate_ramp import RateRamp
 from .effects.rate_random_walk import RateRandomWalk
@@ -57,10 +57,12 @@ def parameter_unit(parameter: str, channel_unit: str) -> str:
     """
     if parameter == "bias":
         return channel_unit
+    if parameter in LOWPASS_UNITS:
+        return LOWPASS_UNITS[parameter]
     if parameter not in _TERM_OF_PARAMETER:
         raise ValueError(
             f"unknown noise parameter {parameter!r}; expected bias or one of "
-            f"{', '.join(_TERM_OF_PARAMETER)}"
+            f"{', '.join((*_TERM_OF_PARAMETER, *LOWPASS_UNITS))}"
         )
     return _TERM_OF_PARAMETER[parameter].unit(channel_unit)
 
@@ -91,7 +93,13 @@ class NoiseModel(eqx.Module):
     R : float
         Rate ramp, U/s.
     F : float
-        Output filter coefficient in (-1, 1), dimensionless.
+        One-tap output filter coefficient in (-1, 1), dimensionless.
+    lowpass : OutputFilter, optional
+        The sensor's low-pass output filter (shape "decimation" or "butterworth"), unit gain
+        at zero frequency: it shapes the white noise, so N stays the low-frequency density.
+    lsb : float
+        The output's resolution, U: the samples are rounded to multiples of it (zero: not
+        rounded).
 
     A parameter of zero leaves its term out. Parameters may be JAX arrays (a batch of draws
     broadcasts through :meth:`allan_variance` and :meth:`psd`).
@@ -116,20 +124,84 @@ class NoiseModel(eqx.Module):
     Q: float | jax.Array = 0.0
     R: float | jax.Array = 0.0
     F: float | jax.Array = 0.0
+    lowpass: OutputFilter | None = None
+    lsb: float | jax.Array = 0.0
 
     def __check_init__(self):
         if not self.rate_hz > 0:
             raise ValueError(f"rate_hz={self.rate_hz!r} must be a positive sample rate")
         if isinstance(self.F, (int, float)) and not -1 < self.F < 1:
             raise ValueError(f"F={self.F!r}: the output filter coefficient lies in (-1, 1)")
+        if self.lowpass is not None and (self.lowpass.shape == "one_tap" or _present(self.F)):
+            raise ValueError(
+                "lowpass: a decimation or Butterworth OutputFilter, and F = 0 beside it "
+                "(one output filter shape at a time)"
+            )
+        if isinstance(self.lsb, (int, float)) and not self.lsb >= 0:
+            raise ValueError(f"lsb={self.lsb!r}: the output's resolution is zero or positive")
+
+    @property
+    def rounding_variance(self) -> float:
+        """Variance of the rounding error per sample, LSB^2 / 12, U^2 (zero without an LSB):
+        white, beside the filtered noise (Widrow's additive model, exact to within
+        exp(-2 pi^2 sd^2 / LSB^2) of the noise's sd; within 2e-4 for an LSB of 1.5 sd)."""
+        return self.lsb**2 / 12.0
+
+    def increment_weights(self):
+        """Weights of the spectral components of the increments
+        (:func:`~bayescal.models._components.component_weights`), the rounding's floor on the
+        white one."""
+        weights = component_weights(self.N, self.B, self.K, self.Q, self.F)
+        return weights.at[..., 0].add(self.rounding_variance / self.rate_hz)
+
+    def whittle_weights(self, nu):
+        """(variances, filtered) for :func:`~bayescal.models._whittle.whittle_log_likelihood`
+        at nodes ``nu`` (cycles per sample): without a low-pass, :meth:`increment_weights` and
+        None; with one, the weights the filter does not shape and (|H|^2 at ``nu``, the
+        weights of the white noise's two components it shapes)."""
+        weights = self.increment_weights()
+        if self.lowpass is None:
+            return weights, None
+        white = component_weights(self.N, F=self.F)[..., :2]
+        rest = weights.at[..., 0].set(self.rounding_variance / self.rate_hz).at[..., 1].set(0.0)
+        return rest, (self.lowpass.gain(nu, self.rate_hz), white)
+
+    def increment_autocovariance(self, lags) -> np.ndarray:
+        """Autocovariance of the increments y_{k+1} - y_k at integer ``lags``, U^2: each
+        component's closed form, and the low-pass's change to the white noise's by numerical
+        integration of its spectrum (8192 midpoints on (0, 1/2))."""
+        lags = np.asarray(lags, dtype=float)
+        weights = np.asarray(self.increment_weights())
+        covariance = sum(
+            weight * term.autocovariance(lags, self.rate_hz)
+            for weight, term in zip(weights, SPECTRAL_TERMS, strict=True)
+        )
+        nu = (np.arange(8192) + 0.5) / 16384
+        _, shaping = self.whittle_weights(nu)
+        if shaping is not None:
+            gain, white = (np.asarray(part) for part in shaping)
+            spectrum = sum(
+                w * np.asarray(t.spectrum(nu, self.rate_hz))
+                for w, t in zip(white, SPECTRAL_TERMS[:2], strict=True)
+            )
+            cosine = np.cos(2 * np.pi * np.outer(lags, nu))
+            covariance = covariance + 2 * cosine @ (spectrum * (gain - 1.0)) / 16384
+        return covariance
 
     def allan_variance(self, tau):
         """Allan variance at averaging times ``tau`` (s), U^2: the sum of each term's (the
-        DESIGN.md table, exact for period-averaged samples)."""
+        DESIGN.md table, exact for period-averaged samples), the white noise's through the
+        low-pass when there is one, and the rounding's, LSB^2 / (12 fs tau)."""
         tau = jnp.asarray(tau, dtype=float)
+        white = (
+            White.allan_variance(tau, self.N)
+            if self.lowpass is None
+            else self.lowpass.shaped_allan_variance(tau, self.N, self.rate_hz)
+        )
         return (
             Quantization.allan_variance(tau, self.Q)
-            + White.allan_variance(tau, self.N)
+            + white
+            + self.rounding_variance / (tau * self.rate_hz)
             + OutputFilter.allan_variance(tau, self.N, self.F, self.rate_hz)
             + BiasInstability.allan_variance(tau, self.B)
             + RateRandomWalk.allan_variance(tau, self.K)
@@ -140,12 +212,19 @@ class NoiseModel(eqx.Module):
         """Two-sided power spectral density of the samples at ``f`` (Hz, 0 < f <= fs/2),
         U^2/Hz: white noise reads N^2. The increments' spectrum divided by the differencing
         filter's gain |1 - e^{-2 pi i f / fs}|^2 = 4 sin^2(pi f / fs), per Hz; the rate random
-        walk and flicker diverge at zero frequency, the ramp (deterministic) is left out."""
+        walk and flicker diverge at zero frequency, the ramp (deterministic) is left out. The
+        low-pass multiplies the white noise's; the rounding adds LSB^2 / (12 fs)."""
         nu = jnp.asarray(f, dtype=float) / self.rate_hz
         weights = component_weights(self.N, self.B, self.K, self.Q, self.F)
         shapes = jnp.stack([term.spectrum(nu, self.rate_hz) for term in SPECTRAL_TERMS], -1)
-        increments = jnp.sum(weights * shapes, axis=-1)
-        return increments / (4 * jnp.sin(jnp.pi * nu) ** 2 * self.rate_hz)
+        parts = weights * shapes
+        if self.lowpass is not None:  # the white noise's two components through the filter
+            gain = self.lowpass.gain(nu, self.rate_hz)[..., None]
+            parts = parts.at[..., :2].multiply(gain)
+        increments = jnp.sum(parts, axis=-1)
+        return increments / (4 * jnp.sin(jnp.pi * nu) ** 2 * self.rate_hz) + (
+            self.rounding_variance / self.rate_hz
+        )
 
     def sample(self, key: jax.Array, n: int) -> jax.Array:
         """``n`` samples of the channel as a JAX array (traceable: ``jax.vmap`` over keys
@@ -153,7 +232,11 @@ class NoiseModel(eqx.Module):
         # The order of the draws is fixed: the same key gives the same record in every
         # release.
         white_key, walk_key, bridge_key, flicker_key, quant_key = jax.random.split(key, 5)
-        y = self.bias + White.sample(white_key, n, self.rate_hz, self.N, self.F)
+        if self.lowpass is None:
+            y = self.bias + White.sample(white_key, n, self.rate_hz, self.N, self.F)
+        else:
+            white = White.sample(white_key, 2 * n, self.rate_hz, self.N)
+            y = self.bias + self.lowpass.apply(white, self.rate_hz)[:n]
         if _present(self.K):
             y = y + RateRandomWalk.sample(walk_key, bridge_key, n, self.rate_hz, self.K)
         if _present(self.B):
@@ -162,6 +245,8 @@ class NoiseModel(eqx.Module):
             y = y + Quantization.sample(quant_key, n, self.rate_hz, self.Q)
         if _present(self.R):
             y = y + RateRamp.sample(n, self.rate_hz, self.R)
+        if _present(self.lsb):
+            y = self.lsb * jnp.round(y / self.lsb)
         return y
 
     def simulate(self, n: int, seed: int | jax.Array = 0) -> np.ndarray:
@@ -185,12 +270,15 @@ class NoiseModel(eqx.Module):
     def log_likelihood(self, y) -> float:
         """Log-likelihood of a record ``y`` (U; NaN marks missing samples): the debiased,
         binned Whittle likelihood of its increments (the likelihood every noise fit of
-        bayescal uses, :mod:`bayescal.models._whittle`), plus the exact Gaussian log density
+        bayescal uses, :mod:`bayescal.models._whittle`; the low-pass and the rounding as in
+        :meth:`psd`), plus the exact Gaussian log density
         of its level — the generalised-least-squares estimate of the turn-on bias from block
         means given the noise (:mod:`bayescal.models._level`) — at :attr:`bias`."""
         values = np.asarray(y, dtype=float)
-        weights = component_weights(self.N, self.B, self.K, self.Q, self.F)
-        increments = whittle_log_likelihood(spectral_summary(values, self.rate_hz), weights, self.R)
+        summary = spectral_summary(values, self.rate_hz)
+        variances, filtered = self.whittle_weights(summary.node_frequency)
+        increments = whittle_log_likelihood(summary, variances, self.R, filtered=filtered)
+        weights = self.increment_weights()
         mean, variance = bias_given_noise(level_summary(values, self.rate_hz), weights, self.R)
         level = norm.logpdf(mean, loc=self.bias, scale=jnp.sqrt(variance))
         return float(jnp.sum(increments) + level)

@@ -1,18 +1,40 @@
 """The noise terms a user names (``--terms``, ``terms=``): canonical names, aliases, the
 default and the full set. No JAX here: the command line checks a user's terms before it loads
-anything heavy."""
+anything heavy.
+
+The default, ``auto``, lets the record choose its terms by evidence
+(:func:`bayescal.inference.select_noise_terms`): white noise always, and each of
+:data:`CANDIDATE_TERMS` when the record holds decisive evidence for it.
+"""
+
+from typing import Literal
 
 from .._errors import InputError
 
-PARAMETER_OF_TERM = {
-    "output_filter": "F",
-    "quantization": "Q",
-    "white": "N",
-    "bias_instability": "B",
-    "rate_random_walk": "K",
-    "rate_ramp": "R",
+LOWPASS_PARAMETERS = {
+    "decimation": ("filter_length", "filter_stages"),
+    "butterworth": ("filter_cutoff", "filter_order", "filter_warping"),
 }
-TERM_OF_PARAMETER = {parameter: term for term, parameter in PARAMETER_OF_TERM.items()}
+"""The low-pass output filter's shapes and their parameters (:mod:`.effects.output_filter`)."""
+FILTER_SHAPE_OF_TERM = {
+    "output_filter": "one_tap",
+    "decimation_filter": "decimation",
+    "butterworth_filter": "butterworth",
+}
+"""The output filter's terms, one per shape: a model holds at most one of them."""
+PARAMETERS_OF_TERM = {
+    "quantization": ("Q",),
+    "white": ("N",),
+    "output_filter": ("F",),
+    "decimation_filter": LOWPASS_PARAMETERS["decimation"],
+    "butterworth_filter": LOWPASS_PARAMETERS["butterworth"],
+    "bias_instability": ("B",),
+    "rate_random_walk": ("K",),
+    "rate_ramp": ("R",),
+}
+TERM_OF_PARAMETER = {
+    parameter: term for term, parameters in PARAMETERS_OF_TERM.items() for parameter in parameters
+}
 TERM_ALIASES = {
     "white": "white",
     "n": "white",
@@ -26,29 +48,58 @@ TERM_ALIASES = {
     "k": "rate_random_walk",
     "quantization": "quantization",
     "q": "quantization",
+    "white_angle": "quantization",
     "rate_ramp": "rate_ramp",
     "ramp": "rate_ramp",
     "r": "rate_ramp",
     "output_filter": "output_filter",
+    "one_tap": "output_filter",
     "filter": "output_filter",
     "f": "output_filter",
+    "decimation_filter": "decimation_filter",
+    "decimation": "decimation_filter",
+    "cic": "decimation_filter",
+    "butterworth_filter": "butterworth_filter",
+    "butterworth": "butterworth_filter",
+    "lowpass": "butterworth_filter",
 }
-DEFAULT_TERMS = ("white", "bias_instability", "rate_random_walk")
+AUTO = "auto"
+"""Choose the terms by evidence (the default)."""
+DEFAULT_TERMS = AUTO
+CLASSICAL_TERMS = ("white", "bias_instability", "rate_random_walk")
+"""The three terms most datasheets quote (the default before ``auto``)."""
 ALL_TERMS = (
     "quantization",
     "white",
     "output_filter",
+    "decimation_filter",
+    "butterworth_filter",
     "bias_instability",
     "rate_random_walk",
     "rate_ramp",
 )
+"""Every noise term, in the canonical order."""
+CANDIDATE_TERMS = (
+    "bias_instability",
+    "rate_random_walk",
+    "rate_ramp",
+    "quantization",
+    "output_filter",
+    "decimation_filter",
+    "butterworth_filter",
+)
+"""The terms ``auto`` tries beside white noise (at most one output filter shape)."""
 
 
-def parse_terms(spec: str) -> tuple[str, ...]:
-    """Noise terms from ``--terms`` (comma-separated names or aliases, or ``all``), in the
-    canonical order; the bias is always part of the model."""
-    if spec.strip().lower() == "all":
-        return ALL_TERMS
+def parse_terms(spec: str) -> tuple[str, ...] | Literal["auto"]:
+    """Noise terms from ``--terms`` (comma-separated names or aliases, ``all`` for every term
+    with the one-tap output filter, or ``auto``), in the canonical order; the bias is always
+    part of the model."""
+    word = spec.strip().lower()
+    if word == AUTO:
+        return AUTO
+    if word == "all":
+        return tuple(t for t in ALL_TERMS if t not in ("decimation_filter", "butterworth_filter"))
     terms = set()
     for word in spec.split(","):
         name = word.strip().lower()
@@ -57,15 +108,35 @@ def parse_terms(spec: str) -> tuple[str, ...]:
         if name not in TERM_ALIASES:
             raise InputError(
                 f"--terms: unknown term '{word.strip()}'",
-                fix="choose from white, bias_instability, rate_random_walk, "
-                "quantization, rate_ramp (or rrw, flicker, ramp, all)",
+                fix="choose from white, bias_instability, rate_random_walk, quantization, "
+                "rate_ramp, output_filter, decimation_filter, butterworth_filter (or rrw, "
+                "flicker, ramp, all, auto)",
             )
         terms.add(TERM_ALIASES[name])
-    if not terms & {"white", "bias_instability", "rate_random_walk", "quantization"}:
+    return check_terms(tuple(t for t in ALL_TERMS if t in terms))
+
+
+def check_terms(terms: tuple[str, ...]) -> tuple[str, ...]:
+    """``terms`` (canonical names) if they make a model, else :class:`InputError`."""
+    unknown = [t for t in terms if t not in PARAMETERS_OF_TERM]
+    if unknown:
+        raise InputError(f"terms: unknown term {unknown[0]!r}", fix="see parse_terms")
+    if not set(terms) & {"white", "bias_instability", "rate_random_walk", "quantization"}:
         raise InputError("--terms: the model needs at least one noise term (e.g. white)")
-    if "output_filter" in terms and "white" not in terms:
-        raise InputError("--terms: output_filter shapes the white noise; add white")
-    return tuple(term for term in ALL_TERMS if term in terms)
+    filters = [t for t in terms if t in FILTER_SHAPE_OF_TERM]
+    if filters and "white" not in terms:
+        raise InputError(f"--terms: {filters[0]} shapes the white noise; add white")
+    if len(filters) > 1:
+        raise InputError(
+            f"--terms: one output filter shape at a time ({', '.join(filters)} given)",
+            fix="keep one of them, or use --terms auto to let the record choose",
+        )
+    return tuple(t for t in ALL_TERMS if t in terms)
+
+
+def term_parameters(terms: tuple[str, ...]) -> tuple[str, ...]:
+    """The parameters of ``terms``, in order."""
+    return tuple(p for term in terms for p in PARAMETERS_OF_TERM[term])
 
 
 BASELINE_TERMS = (

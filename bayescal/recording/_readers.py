@@ -1,7 +1,9 @@
-"""Reading the files a recording comes in: CSV (one header row, optional leading ``#`` comment
-lines), Parquet and NPZ with named columns, and the ``sensor_msgs/Imu`` topics of ROS bags
-(:mod:`._rosbag`). Each reader returns the numeric columns by name, the units their header
-writes (``gyro_x[deg/s]``), and the names of the columns that are not numeric."""
+"""Reading the files a recording comes in: text tables (CSV and its cousins, :mod:`._text`),
+Parquet, NumPy and MATLAB arrays (:mod:`._arrays`), and the ``sensor_msgs/Imu`` topics of ROS
+bags (:mod:`._rosbag`). Each reader returns the numeric columns by name, the units their
+header writes (``gyro_x[deg/s]``), the columns that cannot be analysed with the reason (text,
+a text cell in a numeric column, a name used twice, complex numbers ...), every column of the
+file in its order (what ``thermal compensate`` writes back), and notes on what it inferred."""
 
 import re
 from pathlib import Path
@@ -13,7 +15,9 @@ from ._rosbag import SUFFIXES as ROSBAG_SUFFIXES
 from ._rosbag import read_rosbag
 
 _HEADER_UNIT = re.compile(r"^\s*(?P<name>[^\[\]]*?)\s*\[(?P<unit>[^\[\]]+)\]\s*$")
-TABLE_SUFFIXES = (".csv", ".txt", ".parquet", ".pq", ".npz")
+TEXT_SUFFIXES = (".csv", ".txt", ".tsv", ".dat", ".log")
+ARRAY_SUFFIXES = (".npz", ".npy", ".mat")
+TABLE_SUFFIXES = (*TEXT_SUFFIXES, ".parquet", ".pq", *ARRAY_SUFFIXES)
 
 
 def is_rosbag(path: Path) -> bool:
@@ -33,84 +37,204 @@ def split_header(raw_names: list[str]) -> tuple[list[str], dict[str, str]]:
     return names, units
 
 
-def _leading_comment_lines(path: Path) -> int:
-    count = 0
-    with path.open("rb") as handle:
-        for line in handle:
-            if not line.startswith(b"#"):
-                break
-            count += 1
-    return count
+def _duplicates(names: list[str]) -> dict[str, tuple[str, str]]:
+    positions: dict[str, list[int]] = {}
+    for position, name in enumerate(names):
+        positions.setdefault(name, []).append(position + 1)
+    return {
+        name: (
+            f"is the name of {len(where)} columns (columns {', '.join(map(str, where))})",
+            "rename them in the header so that each name is used once",
+        )
+        for name, where in positions.items()
+        if len(where) > 1 and name
+    }
 
 
-def _read_arrow(path: Path, source: str):
+def _seconds_from_first(nanoseconds: np.ndarray) -> np.ndarray:
+    """Integer nanoseconds (dates and times) as float seconds from the first, exactly."""
+    valid = nanoseconds[nanoseconds != np.iinfo(np.int64).min]
+    first = valid[0] if valid.size else 0
+    return (nanoseconds - first).astype(float) * 1e-9
+
+
+def _numbers(column, name: str) -> tuple[np.ndarray | None, str | None]:
+    """A pyarrow column as floats — numbers as they are, dates and times as seconds from the
+    first stamp (with a note) — or None when it holds text."""
     import pyarrow as pa
-    import pyarrow.csv as pa_csv
+    import pyarrow.compute as pc
+    import pyarrow.types as pa_types
+
+    from ._text import time_of_day_seconds
+
+    kind = column.type
+    if pa_types.is_integer(kind) or pa_types.is_floating(kind) or pa_types.is_null(kind):
+        return column.to_numpy(zero_copy_only=False).astype(float), None
+    if pa_types.is_decimal(kind):
+        return column.cast(pa.float64()).to_numpy(zero_copy_only=False), None
+    if pa_types.is_timestamp(kind) or pa_types.is_date(kind):
+        missing = np.iinfo(np.int64).min
+        stamps = pc.cast(column.cast(pa.timestamp("ns")), pa.int64()).fill_null(missing)
+        stamps = stamps.to_numpy()
+        values = _seconds_from_first(stamps)
+        values[stamps == missing] = np.nan
+        return values, f"'{name}' read as dates and times: seconds from its first stamp"
+    if pa_types.is_time(kind) or pa_types.is_string(kind) or pa_types.is_large_string(kind):
+        values = time_of_day_seconds(np.asarray(column.cast(pa.string()).to_pylist()))
+        if values is not None:
+            return values, f"'{name}' read as times of day: seconds from its first stamp"
+    return None, None
+
+
+def _arrow_columns(table, notes: list[str]) -> dict:
+    """Columns of a pyarrow Table: numbers as float, dates and times as seconds from their
+    first stamp, the rest as text (a mostly numeric column with a text cell remembered)."""
+    import pyarrow as pa
+    import pyarrow.types as pa_types
+
+    from ._text import text_cell_problem
+
+    headers = [str(name) for name in table.column_names]
+    names, units = split_header(headers)
+    unusable = _duplicates(names)
+    columns: dict[str, np.ndarray] = {}
+    other: list[str] = []
+    file_columns: list[tuple[str, np.ndarray]] = []
+    for header, name, column in zip(headers, names, table.columns, strict=True):
+        if pa_types.is_null(column.type) and not name:
+            continue  # the empty column a trailing comma on every line makes
+        values, note = _numbers(column, name)
+        if values is None or note:
+            cells = np.asarray(column.cast(pa.string()).to_pylist(), dtype=object)
+            file_columns.append((header, cells))  # text, and dates as the file writes them
+        if values is None:
+            other.append(name)
+            problem = text_cell_problem(cells)
+            if problem is not None and name not in unusable:
+                unusable[name] = problem
+            continue
+        if note:
+            notes.append(note)
+            units.setdefault(name, "s")
+        else:
+            file_columns.append((header, values))
+        if name not in unusable:
+            columns[name] = values
+    return {
+        "columns": columns,
+        "header_units": units,
+        "other_columns": tuple(other),
+        "unusable": unusable,
+        "file_columns": tuple(file_columns),
+    }
+
+
+def _read_text(path: Path, source: str, options: dict) -> dict:
+    from ._text import read_text_arrow
+
+    names = options.get("names")
+    if isinstance(names, dict):
+        raise InputError(
+            "--names VAR:... chooses an array of a .npz or .mat file; a text table has none",
+            source=source,
+            fix="give the names alone: --names a,b,c",
+        )
+    table, notes = read_text_arrow(path, source, options.get("skip_rows") or 0, names)
+    if table.num_rows == 0:
+        raise InputError("the file holds no data rows", source=source)
+    return {**_arrow_columns(table, notes), "notes": tuple(notes)}
+
+
+def _read_parquet(path: Path, source: str) -> dict:
+    import pyarrow as pa
     import pyarrow.parquet as pa_parquet
 
     try:
-        if path.suffix.lower() in (".parquet", ".pq"):
-            return pa_parquet.read_table(path)
-        options = pa_csv.ReadOptions(skip_rows=_leading_comment_lines(path))
-        return pa_csv.read_csv(path, read_options=options)
-    except pa.ArrowInvalid as error:
+        table = pa_parquet.read_table(path)
+    except (pa.ArrowException, OSError) as error:
         detail = str(error).splitlines()[0]
         raise InputError(
-            f"cannot read it as {path.suffix.lstrip('.').upper()}: {detail}",
-            source=source,
-            fix="check that it is a table with one header row",
+            f"cannot read it as Parquet: {detail}", source=source, fix="check the file"
         ) from None
-
-
-def _read_npz(path: Path, source: str) -> dict:
-    try:
-        archive = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as error:
-        raise InputError(f"cannot read it as NPZ: {error}", source=source) from None
-    arrays = {key: archive[key] for key in archive.files}
-    lengths = {array.shape[0] for array in arrays.values() if array.ndim == 1}
-    if len(lengths) != 1:
-        raise InputError(
-            "an NPZ recording needs 1-D arrays of one common length, one per "
-            f"column; found lengths {sorted(lengths) or 'none'}",
-            source=source,
-            fix="save each channel as its own 1-D array",
-        )
-    raw = {key: array for key, array in arrays.items() if array.ndim == 1}
-    names, units = split_header(list(raw))
-    columns = {name: np.asarray(array) for name, array in zip(names, raw.values(), strict=True)}
-    numeric = {k: v.astype(float) for k, v in columns.items() if np.issubdtype(v.dtype, np.number)}
-    other = tuple(k for k in columns if k not in numeric)
-    return {"columns": numeric, "header_units": units, "other_columns": other}
-
-
-def _read_table(path: Path, source: str) -> dict:
-    import pyarrow.types as pa_types
-
-    table = _read_arrow(path, source)
     if table.num_rows == 0:
         raise InputError("the file holds no data rows", source=source)
-    names, units = split_header(table.column_names)
-    columns, other = {}, []
-    for name, column in zip(names, table.columns, strict=True):
-        kind = column.type
-        if pa_types.is_null(kind) and not name:
-            continue  # the empty column a trailing comma on every line makes
-        if pa_types.is_integer(kind) or pa_types.is_floating(kind) or pa_types.is_null(kind):
-            columns[name] = column.to_numpy(zero_copy_only=False).astype(float)
-        else:
-            other.append(name)
-    return {"columns": columns, "header_units": units, "other_columns": tuple(other)}
+    notes: list[str] = []
+    return {**_arrow_columns(table, notes), "notes": tuple(notes)}
 
 
-def read_columns(path: str | Path, topic: str | None = None) -> dict:
-    """The columns of a CSV, Parquet or NPZ recording, or of the ``sensor_msgs/Imu`` topic
-    ``topic`` of a ROS bag: a dict with ``source``, ``columns`` (name -> float array),
-    ``header_units`` and, as each format has them, ``other_columns``, ``topic`` and
-    ``start_stamp_ns``."""
+def _read_arrays(path: Path, source: str, options: dict) -> dict:
+    from ._arrays import array_columns, read_mat, read_npy, read_npz
+
+    suffix = path.suffix.lower()
+    notes = []
+    if suffix == ".mat":
+        arrays = read_mat(path, source)
+        if arrays is None:
+            result = _read_text(path, source, options)
+            return {
+                **result,
+                "notes": ("the .mat file is text: read as a text table", *result["notes"]),
+            }
+    else:
+        arrays = read_npz(path, source) if suffix == ".npz" else read_npy(path, source)
+    if options.get("skip_rows"):
+        raise InputError(
+            "--skip-rows applies to text tables; this file holds arrays",
+            source=source,
+            fix="leave it out",
+        )
+    found = array_columns(
+        arrays,
+        source,
+        names=options.get("names"),
+        samples_axis=options.get("samples_axis"),
+        channels_axis=options.get("channels_axis"),
+    )
+    names, units = split_header(list(found["raw"]))
+    unusable = {**found["unusable"], **_duplicates(names)}
+    columns = {
+        name: np.asarray(values, dtype=float)
+        for name, values in zip(names, found["raw"].values(), strict=True)
+        if name not in unusable
+    }
+    return {
+        "columns": columns,
+        "header_units": units,
+        "other_columns": (),
+        "unusable": unusable,
+        "file_columns": tuple(found["raw"].items()),
+        "notes": tuple(notes),
+    }
+
+
+def read_columns(
+    path: str | Path,
+    topic: str | None = None,
+    *,
+    skip_rows: int = 0,
+    names: list[str] | dict[str, list[str]] | None = None,
+    samples_axis: int | None = None,
+    channels_axis: int | None = None,
+) -> dict:
+    """The columns of a recording file, or of the ``sensor_msgs/Imu`` topic ``topic`` of a ROS
+    bag: a dict with ``source``, ``columns`` (name -> float array), ``header_units``, and, as
+    each format has them, ``other_columns``, ``unusable`` (name -> (problem, fix)),
+    ``file_columns``, ``notes``, ``topic`` and ``start_stamp_ns``."""
     path = Path(path)
     source = str(path)
+    options = {
+        "skip_rows": skip_rows,
+        "names": names,
+        "samples_axis": samples_axis,
+        "channels_axis": channels_axis,
+    }
     if is_rosbag(path):
+        if any(value for value in options.values()):
+            raise InputError(
+                "--skip-rows, --names and --samples-axis/--channels-axis do not apply to a ROS bag",
+                source=source,
+                fix="leave them out",
+            )
         return read_rosbag(path, topic)
     if topic is not None:
         raise InputError(
@@ -123,7 +247,30 @@ def read_columns(path: str | Path, topic: str | None = None) -> dict:
         raise InputError(
             f"unknown file type '{path.suffix}'",
             source=source,
-            fix="use a .csv, .parquet or .npz recording, or a ROS bag (.bag, .db3, .mcap)",
+            fix="use a .csv (or .txt/.tsv), .parquet, .npz, .npy or .mat recording, or a ROS "
+            "bag (.bag, .db3, .mcap)",
         )
-    content = _read_npz(path, source) if suffix == ".npz" else _read_table(path, source)
+    if suffix not in ARRAY_SUFFIXES and (samples_axis is not None or channels_axis is not None):
+        raise InputError(
+            "--samples-axis and --channels-axis apply to arrays (.npz, .npy, .mat)",
+            source=source,
+            fix="leave them out",
+        )
+    try:
+        if suffix in ARRAY_SUFFIXES:
+            content = _read_arrays(path, source, options)
+        elif suffix in (".parquet", ".pq"):
+            if skip_rows or names:
+                raise InputError(
+                    "--skip-rows and --names apply to text tables and arrays, not Parquet",
+                    source=source,
+                    fix="leave them out",
+                )
+            content = _read_parquet(path, source)
+        else:
+            content = _read_text(path, source, options)
+    except PermissionError:
+        raise InputError("cannot be read (permission denied)", source=source) from None
+    except IsADirectoryError:
+        raise InputError("is a folder, not a recording file", source=source) from None
     return {"source": source, **content}

@@ -1,21 +1,36 @@
 """A recording and one channel of it prepared for analysis.
 
-The formats and checks are those of ../shared/DESIGN.md: CSV (one header row, optional leading
-``#`` comment lines), Parquet and NPZ with named columns, ROS bags (:mod:`._readers`); a time
-column ``time`` or ``t``
-(``t_s``, ``time[ms]`` and ``timestamp_ms`` name their unit), or ``--rate``; units from the
-command line, else from the header (``gyro_x[deg/s]``), else from a unit suffix of the name
-(``gyro_x_dps``), else assumed from the kind of sensor — and then said so.
+The formats and checks are those of ../shared/DESIGN.md: text tables, Parquet, NumPy and
+MATLAB arrays, ROS bags (:mod:`._readers`); a time column ``time`` or ``t`` (``t_s``,
+``time[ms]`` and ``timestamp_ms`` name their unit), or ``--rate``; units from the command
+line, else from the header (``gyro_x[deg/s]``), else from a unit suffix of the name
+(``gyro_x_dps``), else assumed from the kind of sensor — and then said so. Raw counts become
+the unit with ``scale`` (``--scale``).
 
 Every problem found in the analysed window is reported with its data row (1 = first row
 under the header) and its time, and raises :class:`InputError`: non-finite values,
 non-increasing or duplicated time stamps, gaps, irregular sampling, too few samples, a
-constant channel, a channel stuck at a rail. Nothing is filled in: with ``gaps="split"``
-missing samples become NaN, which the estimators leave out.
+constant channel, a channel stuck at a rail, a glitch thousands of noise sd from its
+neighbours, values too large or too small for float64 arithmetic. Nothing is filled in: with
+``gaps="split"`` missing samples become NaN, which the estimators leave out.
+
+Plausibility, decided case by case (an error where the answer would be wrong, a note where
+the input is odd but may be meant):
+
+- time stamps too coarse for the rate they imply (float32 stamps far from zero, a millisecond
+  clock at 800 Hz): the rate is taken from the mean step, and a note says so;
+- a time column without a unit that gives an IMU rate below 5 Hz: an error that offers both
+  readings (``--time-unit ms`` or ``--time-unit s``); from 5 to 20 Hz, a note;
+- a static gyro reading hundreds of deg/s (more than 100 deg/s), an accelerometer more than
+  4 g: raw counts, probably — an error when the unit was assumed, a note when it was given;
+- a unit bayescal does not know (other than counts: LSB, counts, V ...), a unit of the other
+  kind of sensor than the name says, ``--unit`` overriding the header: notes;
+- a placeholder first row of zeros (every column 0, far from the rest of the record): left
+  out by :func:`load_recording`, with a note.
 """
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +39,7 @@ from .._errors import InputError
 from ._columns import is_accel_name, is_gyro_name
 from ._levels import RAIL_SIGMAS, rail_check
 from ._readers import read_columns
-from ._units import parse_unit, unit_from_column_suffix
+from ._units import DEG, STANDARD_GRAVITY, is_count_unit, parse_unit, unit_from_column_suffix
 
 _TIME_NAMES = ("time", "t", "timestamp")
 # A jump of more than this many periods between grid positions is a gap ("longer than a few
@@ -36,6 +51,24 @@ _IRREGULAR_SHARE = 0.05
 _LAG_GAIN = 0.02
 MIN_SAMPLES = 16
 _RAIL_RUN = 5
+MIN_RATE_HZ, MAX_RATE_HZ = 1e-3, 1e7
+"""The sample rates ``--rate`` may give."""
+# A glitch: a run shorter than _RAIL_RUN samples this many noise sd (read from the sample to
+# sample differences, which steps between poses do not move) from the record's median.
+GLITCH_SIGMAS = 1000.0
+# What a sensor at rest cannot read: more than this many deg/s, or g (raw counts, probably).
+STATIC_GYRO_LIMIT_DEG_S = 100.0
+STATIC_ACCEL_LIMIT_G = 4.0
+# An IMU rate read from stamps without a unit: below the first, an error; below the second, a
+# note (a millisecond clock read as seconds gives a thousandth of the rate).
+IMPLAUSIBLE_RATE_HZ = 5.0
+UNUSUAL_RATE_HZ = 20.0
+# Magnitudes float64 arithmetic handles through squares, sums and spectra of a record: the
+# values and their spread must stay inside these (see tests/test_bad_input.py).
+LARGEST_VALUE = 1e100
+SMALLEST_SPREAD = 1e-100
+# Leading rows of zeros dropped as a logger's placeholder, at most.
+_PLACEHOLDER_ROWS = 10
 
 
 @dataclass(frozen=True)
@@ -53,6 +86,16 @@ class Recording:
     """The ``sensor_msgs/Imu`` topic of a ROS bag."""
     start_stamp_ns: int | None = None
     """A ROS bag's first ``header.stamp``, nanoseconds since the epoch."""
+    unusable: dict = field(default_factory=dict)
+    """Columns that cannot be analysed: name -> (why, what to do) — a text cell in a numeric
+    column, a name used twice, complex numbers, another length ..."""
+    file_columns: tuple = ()
+    """Every column of the file in its order, text as text: (name, values) pairs (what
+    ``thermal compensate`` writes back)."""
+    notes: tuple[str, ...] = ()
+    """What the reader inferred (an encoding, generated names, a placeholder row left out)."""
+    row_offset: int = 0
+    """Data rows of the file left out before the first row here (a placeholder row)."""
 
     @property
     def n_rows(self) -> int:
@@ -62,6 +105,19 @@ class Recording:
         """The column ``name``, or an :class:`InputError` that lists the columns there are."""
         if name in self.columns:
             return self.columns[name]
+        if name in self.unusable:
+            problem, fix = self.unusable[name]
+            if role == "time column" and name in self.other_columns:
+                fix = (
+                    "write it in seconds, or as ISO 8601 dates and times "
+                    "(2024-05-01T12:00:00.010), or pass --rate HZ"
+                )
+            raise InputError(
+                f"{role} '{name}' {problem}",
+                source=self.source,
+                column=name,
+                fix=fix or "choose another column",
+            )
         if name in self.other_columns:
             raise InputError(
                 f"{role} '{name}' is not numeric",
@@ -69,22 +125,44 @@ class Recording:
                 column=name,
                 fix="choose a column of numbers",
             )
+        others = [*self.unusable, *self.other_columns]
         raise InputError(
             f"no {role} '{name}'",
             source=self.source,
-            fix=f"columns are: {', '.join(self.columns) or '(none)'}",
+            fix=f"columns are: {', '.join(self.columns) or '(none)'}"
+            + (
+                f" (not numeric or not usable: {', '.join(dict.fromkeys(others))})"
+                if others
+                else ""
+            ),
         )
+
+    def has(self, name: str) -> bool:
+        """Whether the file has a column ``name`` (numeric or not)."""
+        return name in self.columns or name in self.unusable or name in self.other_columns
 
     def channel(self, name: str, **options) -> "Channel":
         """Column ``name`` checked and put on a regular sample grid; ``options`` are those of
-        :func:`prepare_channel` (unit, rate, time_column, time_unit, start, stop, gaps,
+        :func:`prepare_channel` (unit, scale, rate, time_column, time_unit, start, stop, gaps,
         temperature)."""
         return prepare_channel(self, name, **options)
 
 
-def load_recording(path: str | Path, *, topic: str | None = None) -> Recording:
-    """Read a recording: CSV, Parquet or NPZ with named columns, or the ``sensor_msgs/Imu``
-    topic ``topic`` of a ROS bag (its only one when None).
+def load_recording(
+    path: str | Path,
+    *,
+    topic: str | None = None,
+    skip_rows: int = 0,
+    names: list[str] | dict[str, list[str]] | None = None,
+    samples_axis: int | None = None,
+    channels_axis: int | None = None,
+) -> Recording:
+    """Read a recording: a text table (CSV, semicolon, tab or space separated), Parquet,
+    NumPy (.npz, .npy) or MATLAB (.mat v4/5/7.3) arrays, or the ``sensor_msgs/Imu`` topic
+    ``topic`` of a ROS bag (its only one when None).
+
+    A first row of zeros in every column, far from the rest of the record (a logger's
+    placeholder), is left out with a note; messages still count rows as the file does.
 
     Parameters
     ----------
@@ -92,6 +170,13 @@ def load_recording(path: str | Path, *, topic: str | None = None) -> Recording:
         The file, or a ROS 2 bag folder.
     topic : str, optional
         The IMU topic of a bag with several.
+    skip_rows : int
+        Lines of a text table to skip before its header (logger metadata).
+    names : list of str, or dict of array name -> list of str, optional
+        Names of the columns of a text table, or of the channels of an array of two or more
+        axes (see :mod:`bayescal.recording._arrays`).
+    samples_axis, channels_axis : int, optional
+        The axes of an array that hold the samples and the channels.
 
     Returns
     -------
@@ -109,7 +194,69 @@ def load_recording(path: str | Path, *, topic: str | None = None) -> Recording:
     >>> recording = bc.load_recording("imu.csv")  # doctest: +SKIP
     >>> gyro = recording.channel("gyro_x", unit="deg/s")  # doctest: +SKIP
     """
-    return Recording(**read_columns(path, topic))
+    content = read_columns(
+        path,
+        topic,
+        skip_rows=skip_rows,
+        names=names,
+        samples_axis=samples_axis,
+        channels_axis=channels_axis,
+    )
+    recording = Recording(**content)
+    if recording.n_rows == 0:
+        raise InputError("the file holds no data rows", source=recording.source)
+    return _without_placeholder(recording)
+
+
+def _is_time_column(name: str, units: dict) -> bool:
+    lowered = name.lower()
+    if lowered in (*_TIME_NAMES, "bag_time"):
+        return True
+    unit = units.get(name) or unit_from_column_suffix(name)
+    return unit is not None and parse_unit(unit).quantity == "time"
+
+
+def _robust_spread(values: np.ndarray) -> float:
+    median = np.median(values)
+    return float(1.4826 * np.median(np.abs(values - median)) or np.std(values))
+
+
+def _without_placeholder(recording: Recording) -> Recording:
+    """The recording without leading rows that hold 0 in every column (time columns aside)
+    when 0 is far from the rest of the record in at least one of them."""
+    data = [
+        values
+        for name, values in recording.columns.items()
+        if not _is_time_column(name, recording.header_units)
+    ]
+    n = recording.n_rows
+    if not data or n <= MIN_SAMPLES + 1:
+        return recording
+    zeros = 0
+    while zeros < min(_PLACEHOLDER_ROWS, n - MIN_SAMPLES) and all(v[zeros] == 0 for v in data):
+        zeros += 1
+    if not zeros:
+        return recording
+    far = False
+    for values in data:
+        rest = values[zeros:][np.isfinite(values[zeros:])]
+        if rest.size and abs(np.median(rest)) > RAIL_SIGMAS * _robust_spread(rest):
+            far = True
+            break
+    if not far:
+        return recording
+    rows = "data row 1 holds" if zeros == 1 else f"data rows 1 to {zeros} hold"
+    note = (
+        f"{rows} 0 in every column, far from the rest of the record (a logger's placeholder "
+        "before its first reading): left out"
+    )
+    return replace(
+        recording,
+        columns={name: values[zeros:] for name, values in recording.columns.items()},
+        file_columns=tuple((name, values[zeros:]) for name, values in recording.file_columns),
+        notes=(*recording.notes, note),
+        row_offset=recording.row_offset + zeros,
+    )
 
 
 @dataclass(frozen=True)
@@ -132,6 +279,8 @@ class Channel:
     """The temperature column on the same grid, when one was asked for."""
     notes: tuple[str, ...] = field(default=())
     """What the loader inferred or noticed (units assumed, gaps split ...)."""
+    scale: float | None = None
+    """The factor the file's numbers were multiplied by (``--scale``), if any."""
     grid: dict = field(default_factory=dict, repr=False)
     """How it was put on its grid (rate, time column and unit, window, gaps): another column
     of the recording prepared alike lands on the same samples."""
@@ -153,45 +302,96 @@ class Channel:
         return self.start_s + np.arange(self.values.size) / self.rate_hz
 
 
-def resolve_unit(table: Recording, column: str, given: str | None) -> tuple[str, str | None]:
-    """The unit of ``column`` and, when it had to be inferred, a note that says how."""
+def _resolve_unit(table: Recording, column: str, given: str | None) -> tuple[str, str | None, str]:
+    """The unit of ``column``, a note when it had to be inferred, and where it came from:
+    given, header, name or assumed."""
     if given:
-        return parse_unit(given).name, None
+        return parse_unit(given).name, None, "given"
     if column in table.header_units:
-        return parse_unit(table.header_units[column]).name, None
+        return parse_unit(table.header_units[column]).name, None, "header"
     from_suffix = unit_from_column_suffix(column)
     if from_suffix:
         return (
             from_suffix,
             f"unit of '{column}' read from its name as {from_suffix}; pass --unit to override",
+            "name",
         )
     if is_gyro_name(column):
         assumed = "deg/s"
     elif is_accel_name(column):
         assumed = "m/s^2"
     else:
-        return "unit", f"unit of '{column}' unknown; numbers are in its own unit (pass --unit)"
-    return assumed, f"unit of '{column}' not given; assumed {assumed} (pass --unit to override)"
+        return (
+            "unit",
+            f"unit of '{column}' unknown; numbers are in its own unit (pass --unit)",
+            "assumed",
+        )
+    return (
+        assumed,
+        f"unit of '{column}' not given; assumed {assumed} (pass --unit to override)",
+        "assumed",
+    )
+
+
+def resolve_unit(table: Recording, column: str, given: str | None) -> tuple[str, str | None]:
+    """The unit of ``column`` and, when it had to be inferred, a note that says how."""
+    unit, note, _ = _resolve_unit(table, column, given)
+    return unit, note
+
+
+def unit_notes(table: Recording, column: str, given: str | None, unit: str) -> list[str]:
+    """Notes on a unit that looks odd for the column: one bayescal does not know, one of the
+    other kind of sensor than the name says, ``--unit`` overriding the header."""
+    notes = []
+    parsed = parse_unit(unit)
+    header = table.header_units.get(column)
+    if given and header and parse_unit(header).name != parsed.name:
+        notes.append(f"--unit {given} overrides the unit the header gives '{column}', {header}")
+    if not parsed.known and not is_count_unit(unit) and unit != "unit":
+        notes.append(
+            f"unit '{unit}' is not one bayescal knows (deg/s, rad/s, m/s^2, g, ... or counts "
+            "such as LSB): numbers are carried in it as given, never converted"
+        )
+    kind = {"angular_rate": "an angular rate", "acceleration": "an acceleration"}
+    if parsed.quantity == "acceleration" and is_gyro_name(column) and not is_accel_name(column):
+        notes.append(
+            f"'{column}' is named like a gyro, but its unit {unit} is {kind['acceleration']}"
+        )
+    elif parsed.quantity == "angular_rate" and is_accel_name(column) and not is_gyro_name(column):
+        notes.append(
+            f"'{column}' is named like an accelerometer, but its unit {unit} is "
+            f"{kind['angular_rate']}"
+        )
+    elif parsed.known and parsed.quantity not in kind:
+        notes.append(
+            f"unit {unit} of '{column}' is a {parsed.quantity.replace('_', ' ')}, not an angular "
+            "rate or an acceleration"
+        )
+    return notes
 
 
 def find_time_column(table: Recording, given: str | None) -> str | None:
     if given:
         table.require(given, "time column")
         return given
-    lowered = {name.lower(): name for name in table.columns}
+    names = [*table.columns, *table.unusable, *table.other_columns]
+    lowered = {name.lower(): name for name in reversed(names)}
     for base in _TIME_NAMES:
         for candidate in (base, *(f"{base}_{u}" for u in ("s", "ms", "us", "ns"))):
             if candidate in lowered:
-                return lowered[candidate]
+                name = lowered[candidate]
+                table.require(name, "time column")  # text or a name used twice: say so
+                return name
     return None
 
 
 def _time_in_seconds(
     table: Recording, name: str, time_unit: str | None
-) -> tuple[np.ndarray, str | None]:
+) -> tuple[np.ndarray, str | None, bool]:
+    """The time column in seconds, a note, and whether its unit was declared."""
     raw = table.columns[name]
     unit_text = time_unit or table.header_units.get(name) or unit_from_column_suffix(name)
-    note = None
+    note, declared = None, unit_text is not None
     if unit_text is None:
         unit_text = "s"
         if name.lower() not in ("time", "t"):  # DESIGN.md: 'time' and 't' are in seconds
@@ -204,68 +404,123 @@ def _time_in_seconds(
             column=name,
             fix="pass --time-unit s, ms, us or ns",
         )
-    return raw * unit.to_si, note
+    return raw * unit.to_si, note, declared
 
 
-def _row_and_time(index: int, relative_time: np.ndarray | None) -> str:
-    """``index`` counts data rows of the file from 0; ``relative_time`` is the whole file's."""
-    where = f"data row {index + 1}"
-    if relative_time is not None and np.isfinite(relative_time[index]):
-        where += f" (t = {relative_time[index]:.6g} s)"
-    return where
+@dataclass(frozen=True)
+class _Place:
+    """Where a sample lies in the file, for messages: its data row (1 = the first row under
+    the header, counting rows the reader left out) and its time."""
+
+    relative_time: np.ndarray | None = None
+    row_offset: int = 0
+
+    def __call__(self, index: int) -> str:
+        where = f"data row {index + 1 + self.row_offset}"
+        if self.relative_time is not None and np.isfinite(self.relative_time[index]):
+            where += f" (t = {self.relative_time[index]:.6g} s)"
+        return where
 
 
-def _check_finite(values, relative_time, offset, source, column):
+def _check_finite(values, place: _Place, offset, source, column):
     bad = ~np.isfinite(values)
     if bad.any():
         first = offset + int(np.flatnonzero(bad)[0])
         raise InputError(
             f"{int(bad.sum())} missing or non-finite value(s) (NaN/inf/empty), "
-            f"first at {_row_and_time(first, relative_time)}",
+            f"first at {place(first)}",
             source=source,
             column=column,
             fix="pick a window without them (--start/--stop) or repair the file",
         )
 
 
-def _check_time_order(time, source, column):
-    _check_finite(time, None, 0, source, column)
+def _stamp_resolution(steps: np.ndarray) -> float:
+    """The grid the positive time steps sit on (their resolution), or 0 when they sit on
+    none coarser than float noise."""
+    distinct = np.unique(steps[steps > 0])
+    if distinct.size == 0:
+        return 0.0
+    if distinct.size == 1:
+        return float(distinct[0])
+    if distinct.size > 64:
+        return 0.0
+    resolution = float(min(distinct[0], np.min(np.diff(distinct))))
+    ratio = distinct / resolution
+    return resolution if np.all(np.abs(ratio - np.round(ratio)) < 1e-3 * ratio) else 0.0
+
+
+def _float32_note(raw_time: np.ndarray, resolution: float) -> str:
+    """'(float32 ...)' when the stamps are float32 numbers whose precision is their
+    resolution."""
+    largest = float(np.max(np.abs(raw_time)))
+    if np.all(raw_time.astype(np.float32) == raw_time):
+        spacing = float(np.spacing(np.float32(largest)))
+        if spacing >= 0.5 * resolution:
+            return f" (float32 stamps: {spacing:.3g} apart at {largest:.6g})"
+    return ""
+
+
+def _check_time_order(time, place: _Place, source, column):
+    _check_finite(time, place, 0, source, column)
     steps = np.diff(time)
     not_increasing = np.flatnonzero(steps <= 0)
     if not_increasing.size:
         index = int(not_increasing[0]) + 1
         what = "duplicated" if steps[index - 1] == 0 else "decreasing"
+        coarse = ""
+        fix = "sort or de-duplicate the time stamps upstream"
+        repeated = np.count_nonzero(steps == 0)
+        if repeated > 0.01 * steps.size:
+            resolution = _stamp_resolution(steps)
+            coarse = (
+                f"; {repeated} stamps repeat the one before: the clock is coarser than the "
+                f"sample period{_float32_note(time, resolution)}"
+            )
+            fix = "pass --rate HZ to take the samples as evenly spaced, or store finer stamps"
         raise InputError(
-            f"{what} time stamp at {_row_and_time(index, time - time[0])}; "
-            f"{not_increasing.size} interval(s) do not increase",
+            f"{what} time stamp at {replace(place, relative_time=time - time[0])(index)}; "
+            f"{not_increasing.size} interval(s) do not increase{coarse}",
             source=source,
             column=column,
-            fix="sort or de-duplicate the time stamps upstream",
+            fix=fix,
         )
 
 
-def _grid_positions(relative_time, window, source, column, gaps):
+def _grid_positions(relative_time, window, place: _Place, source, column, gaps, raw_time):
     """Sample-grid index of each sample in ``window`` and the sample rate, from the time
     stamps; checks gaps and jitter. The period is refitted (least squares of time against
-    grid index) until the grid and the stamps agree on the record's length."""
+    grid index) until the grid and the stamps agree on the record's length. Stamps rounded
+    coarser than a quarter of the period (float32 far from zero, a millisecond clock at
+    hundreds of Hz) start from the mean step instead of the median, and say so."""
     from ._grid import track_grid
 
     time = relative_time[window] - relative_time[window][0]
-    period = float(np.median(np.diff(time)))
+    steps = np.diff(time)
+    period = float(np.median(steps))
+    notes = []
+    resolution = _stamp_resolution(steps)
+    if resolution > 0.25 * period and np.unique(steps).size > 1:
+        typical = steps[steps < 3 * period]
+        period = float(np.mean(typical))
+        notes.append(
+            f"the time stamps are rounded to {resolution:.3g} s"
+            f"{_float32_note(raw_time[window], resolution)}, too coarse to read a "
+            f"{period:.3g} s period from one step: the rate is their mean step"
+        )
     for _ in range(3):
         index, residual = track_grid(time, period, _LAG_GAIN)
         period = float(np.polyfit(index, time, 1)[0])
     off_grid = np.abs(residual) > 0.5
-    notes = []
     if off_grid.mean() > _IRREGULAR_SHARE:
         first = window.start + int(np.flatnonzero(off_grid)[0])
         raise InputError(
             f"irregular sampling: {100 * off_grid.mean():.1f}% of the time stamps are more than "
-            f"half a period off a {period:.6g} s grid, first at "
-            f"{_row_and_time(first, relative_time)}",
+            f"half a period off a {period:.6g} s grid, first at {place(first)}",
             source=source,
             column=column,
-            fix="pass --rate HZ to treat the samples as evenly spaced, or resample upstream",
+            fix=f"pass --rate HZ to treat the samples as evenly spaced (their mean rate is "
+            f"{(time.size - 1) / time[-1]:.6g} Hz), or resample upstream",
         )
     if off_grid.any():
         notes.append(
@@ -279,8 +534,7 @@ def _grid_positions(relative_time, window, source, column, gaps):
         step = time[first + 1] - time[first]
         raise InputError(
             f"gap of {step:.6g} s ({step / period:.1f} sample periods) at "
-            f"{_row_and_time(window.start + first + 1, relative_time)}; {gap_index.size} gap(s) "
-            "in all",
+            f"{place(window.start + first + 1)}; {gap_index.size} gap(s) in all",
             source=source,
             column=column,
             fix="pass --gaps split to analyse the segments without bridging the gaps, or pick a "
@@ -298,7 +552,54 @@ def _grid_positions(relative_time, window, source, column, gaps):
     return index, float(f"{1.0 / period:.12g}"), notes
 
 
-def _check_constant_and_rail(values, relative_time, offset, source, column, unit):
+def _check_rate(rate, declared: bool, source, column) -> list[str]:
+    """A rate read from the stamps that no IMU has: an error; an unusual one from stamps
+    without a unit: a note."""
+    if not 1.0 <= rate <= 1e6 or (not declared and rate < IMPLAUSIBLE_RATE_HZ):
+        hint = (
+            f" (in milliseconds, {1000 * rate:.6g} Hz)"
+            if not declared and rate < IMPLAUSIBLE_RATE_HZ
+            else ""
+        )
+        confirm = ", or --time-unit s if the stamps are seconds" if not declared else ""
+        raise InputError(
+            f"the time stamps give a sample rate of {rate:.6g} Hz{hint}, not an IMU's",
+            source=source,
+            column=column,
+            fix=f"pass --time-unit (s, ms, us, ns) or --rate HZ{confirm}",
+        )
+    if not declared and rate < UNUSUAL_RATE_HZ:
+        return [
+            f"time column '{column}' has no unit: read as seconds, the rate is {rate:.6g} Hz "
+            f"(if it is in milliseconds, {1000 * rate:.6g} Hz: pass --time-unit ms)"
+        ]
+    return []
+
+
+def _check_magnitude(values, place: _Place, offset, source, column, unit):
+    """Values float64 arithmetic can square and sum: neither too large nor too finely
+    spread."""
+    largest = int(np.argmax(np.abs(values)))
+    spread = float(np.ptp(values))
+    if abs(values[largest]) > LARGEST_VALUE:
+        raise InputError(
+            f"value {values[largest]:.3g} {unit} at {place(offset + largest)} is beyond "
+            f"{LARGEST_VALUE:.0e}: its square overflows float64",
+            source=source,
+            column=column,
+            fix="check the column; for raw numbers in another scale pass --scale FACTOR",
+        )
+    if 0 < spread < SMALLEST_SPREAD:
+        raise InputError(
+            f"the values spread over only {spread:.3g} {unit}, below {SMALLEST_SPREAD:.0e}: "
+            "their squares underflow float64",
+            source=source,
+            column=column,
+            fix="pass --scale FACTOR to express them in a larger unit",
+        )
+
+
+def _check_constant_and_rail(values, place: _Place, offset, source, column, unit):
     if np.ptp(values) == 0:
         raise InputError(
             f"the channel is constant at {values[0]:g} {unit}",
@@ -319,12 +620,82 @@ def _check_constant_and_rail(values, relative_time, offset, source, column, unit
             first = offset + int(edges[::2][long_runs[0]])
             raise InputError(
                 f"stuck at a rail: {int(runs[long_runs[0]])} consecutive samples at {rail:g} "
-                f"{unit} from {_row_and_time(first, relative_time)}, far outside the rest of the "
-                "record (saturation)",
+                f"{unit} from {place(first)}, far outside the rest of the record (saturation)",
                 source=source,
                 column=column,
                 fix="exclude the saturated part with --start/--stop",
             )
+
+
+def _noise_sd(values: np.ndarray) -> float:
+    """The sample noise sd read from sample-to-sample differences (steps between poses and
+    slow drifts do not move it), at least half the resolution of a quantized channel."""
+    steps = np.diff(values)
+    sd = 1.4826 * float(np.median(np.abs(steps))) / np.sqrt(2)
+    moving = np.abs(steps[steps != 0])
+    return max(sd, 0.5 * float(moving.min()) if moving.size else 0.0)
+
+
+def _check_glitches(values, place: _Place, offset, source, column, unit):
+    """Samples thousands of noise sd from the record's median in runs too short to be a
+    pose, a rail or a motion: glitches (a logger's error code, a bit flip)."""
+    median = float(np.median(values))
+    sd = _noise_sd(values)
+    if sd == 0:
+        return
+    far = np.abs(values - median) > GLITCH_SIGMAS * sd
+    if not far.any():
+        return
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], far.astype(np.int8), [0]))))
+    starts, runs = edges[::2], edges[1::2] - edges[::2]
+    short = runs < _RAIL_RUN
+    if not short.any():
+        return
+    first = int(starts[short][0])
+    count = int(runs[short].sum())
+    raise InputError(
+        f"{count} glitch sample(s) more than {GLITCH_SIGMAS:g} noise sd from the rest "
+        f"(median {median:.6g} {unit}, noise sd {sd:.3g}), first {values[first]:.6g} {unit} "
+        f"at {place(offset + first)}",
+        source=source,
+        column=column,
+        fix="repair or remove those rows, or pick a window without them (--start/--stop)",
+    )
+
+
+def _static_plausibility(values, unit: str, how: str, scaled: bool, source, column) -> list[str]:
+    """A reading no sensor at rest gives (hundreds of deg/s, tens of g): raw counts,
+    probably. An error when the unit was assumed, a note when it was given."""
+    parsed = parse_unit(unit)
+    level = float(np.median(values))
+    if parsed.quantity == "angular_rate":
+        reading, limit, label = abs(level) * parsed.to_si / DEG, STATIC_GYRO_LIMIT_DEG_S, "deg/s"
+        example = "--scale 1/131 for 131 LSB per deg/s"
+    elif parsed.quantity == "acceleration":
+        reading = abs(level) * parsed.to_si / STANDARD_GRAVITY
+        limit, label, example = STATIC_ACCEL_LIMIT_G, "g", "--scale 1/16384 for 16384 LSB per g"
+    else:
+        return []
+    if reading <= limit:
+        return []
+    problem = (
+        f"reads {level:.6g} {unit} at its median, more than the {limit:g} {label} a sensor at "
+        "rest can read: raw counts?"
+    )
+    if how == "assumed":
+        raise InputError(
+            f"{problem} (the unit {unit} was assumed)",
+            source=source,
+            column=column,
+            fix=f"pass --scale FACTOR and --unit (e.g. {example}, or --scale SENSOR for a "
+            "sensor card's resolution), or --unit LSB to analyse the counts as they are",
+        )
+    if scaled:
+        return [
+            f"'{column}' {problem[: -len(' raw counts?')]} after --scale: counts with an offset "
+            "(unsigned, centred on mid-scale)? The noise figures do not depend on it; the bias does"
+        ]
+    return [f"'{column}' {problem} If so, pass --scale FACTOR (e.g. {example})"]
 
 
 def _clipping_notes(values, unit) -> list[str]:
@@ -344,6 +715,48 @@ def _clipping_notes(values, unit) -> list[str]:
     ]
 
 
+def _time_base(
+    table: Recording,
+    time_column: str | None,
+    time_unit: str | None,
+    rate: float | None,
+    n_rows: int,
+) -> tuple[np.ndarray, str | None, list[str], bool, np.ndarray | None]:
+    """Seconds from the first sample for every row, the time column used, notes, whether
+    its unit was declared, and the stamps as the file writes them."""
+    time_name = find_time_column(table, time_column)
+    if rate is not None:
+        if not (MIN_RATE_HZ <= rate <= MAX_RATE_HZ):
+            raise InputError(
+                f"--rate {rate:g} must be a sample rate from {MIN_RATE_HZ:g} to {MAX_RATE_HZ:g} Hz"
+            )
+        notes = (
+            [
+                f"--rate {rate:g} Hz given: samples taken as evenly spaced; time column "
+                f"'{time_name}' not used"
+            ]
+            if time_name
+            else []
+        )
+        return np.arange(n_rows) / rate, None, notes, True, None
+    if time_name is None:
+        raise InputError(
+            "no time column ('time' or 't') and no --rate",
+            source=table.source,
+            fix=f"pass --rate HZ or --time-column NAME (columns: {', '.join(table.columns)})",
+        )
+    if time_unit is not None and parse_unit(time_unit).quantity != "time":
+        raise InputError(
+            f"--time-unit {time_unit!r} is not a unit of time", fix="give s, ms, us or ns"
+        )
+    time, time_note, declared = _time_in_seconds(table, time_name, time_unit)
+    _check_time_order(time, _Place(row_offset=table.row_offset), table.source, time_name)
+    # The unit of the stamps judged on the whole record, before any window is cut from it.
+    _check_rate(1.0 / float(np.median(np.diff(time))), declared, table.source, time_name)
+    raw = table.columns[time_name]
+    return time - time[0], time_name, [time_note] if time_note else [], declared, raw
+
+
 def seconds_from_start(
     table: Recording,
     time_column: str | None,
@@ -353,28 +766,16 @@ def seconds_from_start(
     n_rows: int,
 ) -> tuple[np.ndarray, str | None, list[str]]:
     """Seconds from the first sample for every row, the time column used, and notes."""
-    time_name = find_time_column(table, time_column)
-    if rate is not None:
-        if not (rate > 0 and math.isfinite(rate)):
-            raise InputError(f"--rate {rate} must be a positive sample rate in Hz")
-        notes = (
-            [
-                f"--rate {rate:g} Hz given: samples taken as evenly spaced; time column "
-                f"'{time_name}' not used"
-            ]
-            if time_name
-            else []
-        )
-        return np.arange(n_rows) / rate, None, notes
-    if time_name is None:
-        raise InputError(
-            "no time column ('time' or 't') and no --rate",
-            source=table.source,
-            fix=f"pass --rate HZ or --time-column NAME (columns: {', '.join(table.columns)})",
-        )
-    time, time_note = _time_in_seconds(table, time_name, time_unit)
-    _check_time_order(time, table.source, time_name)
-    return time - time[0], time_name, [time_note] if time_note else []
+    relative, name, notes, _, _ = _time_base(table, time_column, time_unit, rate, n_rows)
+    return relative, name, notes
+
+
+def _check_window(start, stop) -> None:
+    for argument, value in (("--start", start), ("--stop", stop)):
+        if value is not None and not math.isfinite(value):
+            raise InputError(f"{argument} {value} must be a finite number of seconds")
+    if start is not None and stop is not None and stop <= start:
+        raise InputError(f"--stop {stop:g} s must come after --start {start:g} s")
 
 
 def prepare_channel(
@@ -382,6 +783,7 @@ def prepare_channel(
     channel: str,
     *,
     unit: str | None = None,
+    scale: float | None = None,
     rate: float | None = None,
     time_column: str | None = None,
     time_unit: str | None = None,
@@ -389,23 +791,50 @@ def prepare_channel(
     stop: float | None = None,
     gaps: str = "error",
     temperature: str | None = None,
+    at_rest: bool = True,
 ) -> Channel:
     """Select ``channel`` in the window [start, stop) seconds from the first sample, check it
-    and put it on a regular sample grid."""
+    and put it on a regular sample grid.
+
+    ``scale`` multiplies the channel's values (raw counts to ``unit``: 1/131 for a gyro
+    giving 131 LSB per deg/s); ``temperature`` names a temperature column put on the same
+    grid. The checks and notes are those of this module's docstring; ``at_rest=False`` (a
+    calibration session, moved between poses) leaves out the glitch check, which a fast
+    turn of the hand would fail: the still sections a calibration uses leave glitches out.
+    """
     if gaps not in ("error", "split"):
         raise InputError(f"--gaps {gaps!r} must be 'error' or 'split'")
-    if start is not None and stop is not None and stop <= start:
-        raise InputError(f"--stop {stop:g} s must come after --start {start:g} s")
+    _check_window(start, stop)
+    if scale is not None and not (math.isfinite(scale) and scale != 0):
+        raise InputError(f"--scale {scale!r} must be a finite number other than 0")
     values = table.require(channel, "channel")
-    resolved_unit, unit_note = resolve_unit(table, channel, unit)
-    notes = [unit_note] if unit_note else []
+    if temperature is not None and temperature == channel:
+        raise InputError(
+            f"--temperature {temperature} names the analysed channel",
+            source=table.source,
+            fix="name the temperature column",
+        )
+    resolved_unit, unit_note, how = _resolve_unit(table, channel, unit)
+    notes = [*table.notes, *([unit_note] if unit_note else [])]
+    notes.extend(unit_notes(table, channel, unit, resolved_unit))
+    if scale is not None:
+        values = values * scale
+        notes.append(f"'{channel}' multiplied by {scale:.6g} (--scale): values in {resolved_unit}")
     temperature_values = table.require(temperature, "temperature column") if temperature else None
     given_rate = rate
 
-    relative, time_name, time_notes = seconds_from_start(
-        table, time_column, time_unit, rate, n_rows=values.size
+    relative, time_name, time_notes, declared, raw_time = _time_base(
+        table, time_column, time_unit, rate, values.size
     )
+    if time_name == channel:
+        raise InputError(
+            f"'{channel}' is the time column, not a channel to analyse",
+            source=table.source,
+            column=channel,
+            fix="name a sensor's column with --channel",
+        )
     notes.extend(time_notes)
+    place = _Place(relative, table.row_offset)
     first = int(np.searchsorted(relative, start)) if start is not None else 0
     last = int(np.searchsorted(relative, stop)) if stop is not None else values.size
     if last - first < MIN_SAMPLES:
@@ -418,28 +847,30 @@ def prepare_channel(
             fix="widen the window (--start/--stop) or record longer",
         )
     window = slice(first, last)
-    _check_finite(values[window], relative, first, table.source, channel)
+    _check_finite(values[window], place, first, table.source, channel)
+    _check_magnitude(values[window], place, first, table.source, channel, resolved_unit)
     if rate is None:
         positions, rate, grid_notes = _grid_positions(
-            relative, window, table.source, time_name, gaps
+            relative, window, place, table.source, time_name, gaps, raw_time
         )
+        notes.extend(_check_rate(rate, declared, table.source, time_name))
         notes.extend(grid_notes)
-        if not 1.0 <= rate <= 1e6:
-            raise InputError(
-                f"the time stamps give a sample rate of {rate:.6g} Hz",
-                source=table.source,
-                column=time_name,
-                fix="pass --time-unit (s, ms, us, ns) or --rate HZ",
-            )
     else:
         positions = np.arange(last - first)
-    _check_constant_and_rail(values[window], relative, first, table.source, channel, resolved_unit)
+    _check_constant_and_rail(values[window], place, first, table.source, channel, resolved_unit)
+    if at_rest:
+        _check_glitches(values[window], place, first, table.source, channel, resolved_unit)
+    notes.extend(
+        _static_plausibility(
+            values[window], resolved_unit, how, scale is not None, table.source, channel
+        )
+    )
     notes.extend(_clipping_notes(values[window], resolved_unit))
     grid = np.full(int(positions[-1]) + 1, np.nan)
     grid[positions] = values[window]
     grid_temperature = None
     if temperature_values is not None:
-        _check_finite(temperature_values[window], relative, first, table.source, temperature)
+        _check_finite(temperature_values[window], place, first, table.source, temperature)
         grid_temperature = np.full(grid.size, np.nan)
         grid_temperature[positions] = temperature_values[window]
     return Channel(
@@ -450,7 +881,8 @@ def prepare_channel(
         rate_hz=float(rate),
         start_s=float(relative[first]),
         temperature=grid_temperature,
-        notes=tuple(notes),
+        notes=tuple(dict.fromkeys(notes)),
+        scale=scale,
         grid={
             "rate": given_rate,
             "time_column": time_column,
@@ -479,7 +911,14 @@ def companions(
         find_temperature_column(table, temperature)
     series = None
     if temperature is not None:
-        series = prepare_channel(table, channel.channel, temperature=temperature, **channel.grid)
+        series = prepare_channel(
+            table,
+            channel.channel,
+            temperature=temperature,
+            unit=channel.unit,
+            scale=channel.scale,
+            **channel.grid,
+        )
         series = series.temperature
         finite = series[np.isfinite(series)]
         if series.size != channel.values.size or finite.size == 0 or np.ptp(finite) == 0:
@@ -488,7 +927,10 @@ def companions(
     columns = find_accelerometer_columns(table)
     if parse_unit(channel.unit).quantity == "angular_rate" and columns:
         for name in columns:
-            column = prepare_channel(table, name, **channel.grid)
+            try:
+                column = prepare_channel(table, name, **channel.grid)
+            except InputError:
+                continue  # an accelerometer that cannot be used is no evidence (none is asked)
             if column.values.size == channel.values.size:
                 accelerometers[name] = column.values
                 units[name] = column.unit

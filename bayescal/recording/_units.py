@@ -44,10 +44,15 @@ _KNOWN = (
     Unit("rad", "angle", 1.0),
     Unit("m/s", "velocity", 1.0),
     Unit("degC", "temperature", 1.0),
+    # Temperature units are compared, never converted (their zero points differ).
+    Unit("degF", "temperature", 5.0 / 9.0),
+    Unit("K", "temperature", 1.0),
     Unit("s", "time", 1.0),
     Unit("ms", "time", 1e-3),
     Unit("us", "time", 1e-6),
     Unit("ns", "time", 1e-9),
+    Unit("min", "time", 60.0),
+    Unit("h", "time", 3600.0),
 )
 _BY_NAME = {unit.name: unit for unit in _KNOWN}
 _ALIASES = {
@@ -76,6 +81,11 @@ _ALIASES = {
     "degc": "degC",
     "deg c": "degC",
     "celsius": "degC",
+    "°f": "degF",
+    "degf": "degF",
+    "deg f": "degF",
+    "fahrenheit": "degF",
+    "kelvin": "K",
     "sec": "s",
     "µs": "us",
     "μs": "us",
@@ -109,6 +119,15 @@ _INTEGRAL = {
 _PER_SECOND = {"deg/s": "deg/s^2", "rad/s": "rad/s^2", "m/s^2": "m/s^3"}
 
 NOISE_PARAMETERS = ("Q", "N", "B", "K", "R")
+# Opaque units that are expected: a converter's counts, an analog output's volts.
+_COUNT_UNITS = {"lsb", "lsbs", "count", "counts", "cnt", "digits", "raw", "adc", "a.u.", "au"}
+_COUNT_UNITS |= {"v", "mv", "dn"}
+
+
+def is_count_unit(text: str) -> bool:
+    """Whether ``text`` names raw counts (LSB, counts ...) or volts: units bayescal carries
+    without converting, and without a note."""
+    return text.strip().lower() in _COUNT_UNITS
 
 
 def parse_unit(text: str) -> Unit:

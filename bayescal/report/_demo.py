@@ -2,9 +2,10 @@
 (:mod:`bayescal.capabilities._demo`) as CSV beside its truth, analysed into the report, with
 discovery on every gyro."""
 
+from dataclasses import replace
 from pathlib import Path
 
-from .._output import write_csv, write_json
+from .._output import staged, write_csv, write_json
 from ..capabilities._demo import DEMO_CHANNELS, DEMO_SENSOR, DISCOVERY_BASELINE, demo_recording
 from ..recording._recording import load_recording
 from ._discovery import discovery_findings
@@ -22,7 +23,8 @@ def write_demo(
     csv_path = folder / "demo_imu.csv"
     write_csv(csv_path, columns)
     write_json(folder / "demo_truth.json", truth)
-    recording = load_recording(csv_path)
+    # Read back as a user's file is read (before the run ends, from its staged temporary).
+    recording = replace(load_recording(staged(csv_path)), source=str(csv_path))
 
     def discoveries(recording, channel):
         """Discovery on every gyro: the hidden effect must be found where it is, and nothing

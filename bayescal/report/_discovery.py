@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from .._output import atomic_path, to_jsonable, write_json, write_netcdf
+from .._output import atomic_path, file_stem, to_jsonable, write_json, write_netcdf
 from ..capabilities._discovery import CheckResult, Discovery, SearchResult, discover
 from ..inference._mcmc import summarize
 from ..models._composite import bin_ratios
@@ -106,11 +106,24 @@ def discovery_text(document: dict) -> str:
     if not document["effects"]:
         lines.append("nothing missing: no term improves the fit decisively")
     for number, effect in enumerate(document["effects"], 1):
-        lines.append(
-            f"{number}. {effect['name']}: log Bayes factor "
-            f"{effect['evidence']['log_bayes_factor']:.1f}, delta ELPD "
-            f"{effect['delta_elpd']:.1f} ± {effect['delta_elpd_se']:.1f}"
-        )
+        evidence = effect["evidence"]
+        if evidence["log_bayes_factor"] is None and "grid" in evidence:
+            grid = evidence["grid"]
+            lines.append(
+                f"{number}. {effect['name']}: every one of {grid['samples']} samples on a grid "
+                f"of {grid['lsb']:.6g} {grid['unit']} ({grid['levels']} levels)"
+            )
+        else:
+            lines.append(
+                f"{number}. {effect['name']}: log Bayes factor "
+                f"{evidence['log_bayes_factor']:.1f}, delta ELPD "
+                f"{effect['delta_elpd']:.1f} ± {effect['delta_elpd_se']:.1f}"
+            )
+        if "white_angle_noise" in evidence:
+            lines.append(
+                "   white angle noise beyond the rounding: log Bayes factor "
+                f"{evidence['white_angle_noise']['log_bayes_factor']:.1f}"
+            )
         lines.append(f"   {effect['explanation']}")
         if effect["name"] == "saturation":
             evidence = effect["evidence"]
@@ -125,10 +138,15 @@ def discovery_text(document: dict) -> str:
             )
         for name, value in effect["parameters"].items():
             if "q05" in value:
+                digits = _digits(value["q05"], value["q95"])
                 lines.append(
-                    f"   {name} = {value['mean']:.4g} [{value['q05']:.4g}, {value['q95']:.4g}] "
-                    f"{value['unit']} (90 %)"
+                    f"   {name} = {value['mean']:.{digits}g} [{value['q05']:.{digits}g}, "
+                    f"{value['q95']:.{digits}g}] {value['unit']} (90 %)"
                 )
+            elif "value" in value:
+                shown = value["value"]
+                shown = f"{shown:.6g}" if isinstance(shown, float) else shown
+                lines.append(f"   {name} = {shown} {value.get('unit', '')}".rstrip())
     lines.append(f"final model: {', '.join(document['final_terms'])}")
     if "unexplained" in document:
         lines.append(f"still unexplained: {document['unexplained']['explanation']}")
@@ -137,6 +155,15 @@ def discovery_text(document: dict) -> str:
         before = "ok" if check["passed_before"] else "failed"
         lines.append(f"   check {check['name']:<28} before: {before:<7} after: {mark}")
     return "\n".join(lines)
+
+
+def _digits(low: float, high: float) -> int:
+    """Significant digits that show an interval's ends apart (four at least): two lines
+    0.003 Hz apart near 38 Hz print as 37.991 and 37.994, not both 37.99."""
+    if not (np.isfinite(low) and np.isfinite(high)) or high <= low:
+        return 4
+    magnitude = max(abs(low), abs(high))
+    return int(max(4, min(12, np.ceil(np.log10(magnitude / (high - low))) + 2)))
 
 
 def _curve(checks: list, name: str) -> dict:
@@ -169,7 +196,7 @@ def diagnostics(result: SearchResult) -> dict:
         },
         "spectrum": {
             "frequency_hz": summary.frequency_hz.tolist(),
-            "power": (summary.moment0 / summary.count).tolist(),
+            "power": (summary.power / summary.count).tolist(),
             "baseline_model": model_before.tolist(),
             "final_power": (ratio_after * model_after / summary.count).tolist(),
             "final_model": model_after.tolist(),
@@ -360,7 +387,7 @@ def write_folder(folder: Path, discovery: Discovery, document: dict) -> None:
     """Figures (PNG), the curves and the findings (JSON), the final posterior (netCDF)."""
     folder = Path(folder)
     folder.mkdir(exist_ok=True)
-    stem = f"discover_{document['channel']}"
+    stem = f"discover_{file_stem(document['channel'])}"
     curves = document.get("diagnostics") or diagnostics(discovery.result)
     for name, figure in _figures(curves, document["channel"]).items():
         with atomic_path(folder / f"{stem}_{name}.png") as temporary:

@@ -38,19 +38,27 @@ Kalibr, anyone) wrote. Two runs complete a file::
     bayescal noise imu.bag --channel acc_x --export kalibr imu.yaml
 
 Until both have run, the missing sensor's entries are absent (with a comment that says how to
-add them), so Kalibr or MATLAB stops rather than calibrating with invented numbers. Pick the
-noisiest axis of each sensor for the export: the model applies its value to all three axes.
+add them), so Kalibr or MATLAB stops rather than calibrating with invented numbers.
+
+Every axis exported to one file is kept (in the file's ``bayescal`` notes for Kalibr, in a
+``% bayescal axes:`` line for MATLAB, each with its values and where they come from; the same
+channel exported again replaces its entry), and the sensor's one value covers them all: the
+largest of the axes (``--export-axes largest``, the default: Kalibr's wiki advises erring
+high) or their RMS (``--export-axes rms``). The file says which, per value. A file is read
+again and rewritten under a lock (``.NAME.lock`` beside it), so that runs exporting to it at
+the same time add to it rather than overwrite one another.
 """
 
+import contextlib
 import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from importlib.metadata import version
 from pathlib import Path
 
 from .._errors import InputError
-from .._output import check_writable, write_atomic
+from .._output import Outputs, check_writable, to_jsonable, write_atomic
 from ..recording._units import parse_unit
 
 FORMATS = ("kalibr", "matlab")
@@ -171,11 +179,50 @@ def estimates_from_result(result: dict, to_si: float) -> dict[str, Estimate]:
         elif reading["ci_high"] is not None:
             estimates[name] = Estimate(
                 reading["ci_high"] * to_si,
-                f"classical upper bound: the Allan curve has no stretch of its slope{why}",
+                f"classical upper bound ({reading.get('read_at', 'no stretch of its slope')}){why}",
             )
         else:
             estimates[name] = Estimate(None, "not estimated")
     return estimates
+
+
+COMBINATIONS = ("largest", "rms")
+
+
+def combine(values: list[float], how: str) -> float | None:
+    """One value for a sensor from its axes' values: the largest, or their RMS (root of the
+    mean square); None when no axis has one."""
+    if not values:
+        return None
+    if how == "rms":
+        return math.sqrt(sum(value * value for value in values) / len(values))
+    return max(values)
+
+
+def _axis_entry(noise: SensorNoise) -> dict:
+    """What a file keeps of one exported axis (in its ``bayescal`` notes): SI values of N, K
+    and B, how each was obtained, where the axis comes from."""
+    return {
+        "from": f"{noise.channel} of {noise.source} at {noise.rate_hz:.6g} Hz",
+        "rate_hz": float(noise.rate_hz),
+        **{name: noise.estimates[name].value for name in ("N", "K", "B")},
+        "how": {name: noise.estimates[name].describe() for name in ("N", "K", "B")},
+    }
+
+
+def _is_value(value) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _valid_axes(axes) -> dict:
+    """The axis entries of a file's notes that bayescal can combine."""
+    if not isinstance(axes, dict):
+        return {}
+    return {
+        str(name): entry
+        for name, entry in axes.items()
+        if isinstance(entry, dict) and isinstance(entry.get("from"), str)
+    }
 
 
 @dataclass
@@ -185,15 +232,25 @@ class _Plan:
     sensor: str
     to_si: float
     topic: str | None
-    existing: dict = field(default_factory=dict)
+    combine: str = "largest"
 
 
 def plan_exports(
-    requests: list[list[str]] | None, unit: str, channel: str, source: str, topic: str | None
+    requests: list[list[str]] | None,
+    unit: str,
+    channel: str,
+    source: str,
+    topic: str | None,
+    combine_axes: str = "largest",
 ) -> list[_Plan]:
     """Check every ``--export FORMAT PATH`` before the analysis runs: the format, that PATH
     can be written, that a file already there is one to add to, and that the channel is a
-    gyro or accelerometer in a physical unit."""
+    gyro or accelerometer in a physical unit. ``combine_axes`` says how one value per sensor
+    covers the axes exported to one file: ``largest`` or ``rms``."""
+    if combine_axes not in COMBINATIONS:
+        raise InputError(
+            f"--export-axes {combine_axes!r}", fix=f"give one of {', '.join(COMBINATIONS)}"
+        )
     plans = []
     for requested_format, path_text in requests or ():
         export_format = requested_format.lower()
@@ -204,19 +261,40 @@ def plan_exports(
                 fix=f"use one of: {', '.join(FORMATS)}",
             )
         path = check_writable(path_text, argument)
-        if path.is_dir():
-            raise InputError(f"{argument} {path}: is a folder", fix="give a file name")
         if path.exists() and not os.access(path, os.W_OK):
             raise InputError(f"{argument} {path}: the file is not writable")
         sensor, to_si = sensor_of_unit(unit, channel, source)
-        reader = _read_kalibr if export_format == "kalibr" else _read_matlab
-        existing = reader(path, argument) if path.exists() else {}
-        plans.append(_Plan(export_format, path, sensor, to_si, topic, existing))
+        if path.exists():
+            _reader(export_format)(path, argument)  # refuse a file that is not ours now
+        plans.append(_Plan(export_format, path, sensor, to_si, topic, combine_axes))
     return plans
 
 
+def _reader(export_format: str):
+    return _read_kalibr if export_format == "kalibr" else _read_matlab
+
+
+@contextlib.contextmanager
+def _locked(path: Path):
+    """An exclusive lock beside ``path`` (``.NAME.lock``): held to the end of the run inside
+    :class:`~bayescal._output.Outputs` (the file is replaced when the run succeeds), else
+    for the block."""
+    outputs = Outputs.active()
+    if outputs is not None:
+        outputs.lock(path)
+        yield
+        return
+    import fcntl
+
+    with open(path.with_name(f".{path.name}.lock"), "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        yield
+
+
 def write_exports(plans: list[_Plan], result: dict) -> list[str]:
-    """Write every planned export from a ``bayescal noise`` result; one line per file."""
+    """Write every planned export from a ``bayescal noise`` result; one line per file. Each
+    file is read again and rewritten under a lock, so that runs exporting other axes or the
+    other sensor to it at the same time add to it rather than overwrite one another."""
     lines = []
     for plan in plans:
         noise = SensorNoise(
@@ -226,11 +304,14 @@ def write_exports(plans: list[_Plan], result: dict) -> list[str]:
             result["rate_hz"],
             estimates_from_result(result, plan.to_si),
         )
-        if plan.format == "kalibr":
-            text, other = kalibr_yaml(noise, plan.existing, plan.topic)
-        else:
-            text, other = matlab_script(noise, plan.existing)
-        write_atomic(plan.path, text)
+        argument = f"--export {plan.format}"
+        with _locked(plan.path):
+            existing = _reader(plan.format)(plan.path, argument) if plan.path.exists() else {}
+            if plan.format == "kalibr":
+                text, other = kalibr_yaml(noise, existing, plan.topic, plan.combine)
+            else:
+                text, other = matlab_script(noise, existing, plan.combine)
+            write_atomic(plan.path, text)
         kept = f"; {other}" if other else ""
         lines.append(
             f"bayescal noise: wrote {plan.sensor} noise of {noise.channel} to {plan.path} "
@@ -239,11 +320,44 @@ def write_exports(plans: list[_Plan], result: dict) -> list[str]:
     return lines
 
 
+def _axes_summary(sensor: str, axes: dict, how: str) -> tuple[list[str], dict]:
+    """Comment lines that list the axes, and the combined SI values of N, K and B."""
+    combined = {
+        name: combine([entry[name] for entry in axes.values() if _is_value(entry.get(name))], how)
+        for name in ("N", "K", "B")
+    }
+    if len(axes) == 1:
+        entry = next(iter(axes.values()))
+        return [f"# {sensor.capitalize()}s: {entry['from']}"], combined
+    rule = "the largest of them" if how == "largest" else "their RMS"
+    lines = [
+        f"# {sensor.capitalize()}s: {len(axes)} axes, each value below {rule} "
+        f"(--export-axes {how}):"
+    ]
+    for entry in axes.values():
+        values = "; ".join(
+            f"{name} {entry[name]:.4e}" if _is_value(entry.get(name)) else f"{name} not estimated"
+            for name in ("N", "K", "B")
+        )
+        lines.append(f"#   {entry['from']}: {values}")
+    return lines, combined
+
+
+def _how(axes: dict, name: str, how: str) -> str:
+    """How the combined value of parameter ``name`` was obtained."""
+    if len(axes) == 1:
+        entry = next(iter(axes.values()))
+        return entry.get("how", {}).get(name, "") if isinstance(entry.get("how"), dict) else ""
+    having = [channel for channel, entry in axes.items() if _is_value(entry.get(name))]
+    rule = "largest" if how == "largest" else "RMS"
+    return f"{rule} of {', '.join(having)}" if having else "not estimated"
+
+
 # --- Kalibr ------------------------------------------------------------------------------
 
 
 def _read_kalibr(path: Path, argument: str) -> dict:
-    """The other sensor's entries, rostopic and bayescal's notes of an existing imu.yaml."""
+    """The entries, rostopic and bayescal's notes of an existing imu.yaml."""
     from ruamel.yaml import YAML, YAMLError
 
     try:
@@ -266,77 +380,112 @@ def _read_kalibr(path: Path, argument: str) -> dict:
     return content
 
 
-def _kalibr_sensor_lines(noise: SensorNoise) -> list[str]:
-    sensor = noise.sensor
-    lines = [
-        f"# {sensor.capitalize()}s: {noise.channel} of {noise.source}, {noise.rate_hz:.6g} Hz",
-    ]
+def _kalibr_axes(sensor: str, existing: dict, *, recorded_only: bool = False) -> dict:
+    """The axes of ``sensor`` a Kalibr file already holds: from bayescal's notes, or, for a
+    file that has the values without them (unless ``recorded_only``), one entry for those
+    values."""
+    notes = existing.get("bayescal") if isinstance(existing.get("bayescal"), dict) else {}
+    recorded = notes.get(sensor)
+    if isinstance(recorded, dict):
+        axes = _valid_axes(recorded.get("axes"))
+        if axes or recorded_only:
+            return axes
+    if recorded_only:
+        return {}
+    values = {
+        parameter: existing.get(f"{sensor}_{key}")
+        for parameter, key in _KALIBR_KEYS.items()
+        if _is_value(existing.get(f"{sensor}_{key}"))
+    }
+    if not values:
+        return {}
+    origin = recorded if isinstance(recorded, str) else "an earlier export"
+    return {"(kept)": {"from": origin, **values, "how": {}}}
+
+
+def _kalibr_sensor_lines(sensor: str, axes: dict, how: str) -> list[str]:
+    lines, combined = _axes_summary(sensor, axes, how)
     for parameter in ("N", "K"):
-        estimate = noise.estimates[parameter]
         key = f"{sensor}_{_KALIBR_KEYS[parameter]}"
         unit = _KALIBR_UNITS[sensor, parameter]
-        comment = f"[{unit}] {_NAMES[parameter]}: {estimate.describe()}"
-        if estimate.value is None:
+        comment = f"[{unit}] {_NAMES[parameter]}: {_how(axes, parameter, how)}"
+        if combined[parameter] is None:
             lines.append(f"# {key}: not estimated from this recording ({comment})")
         else:
-            lines.append(f"{key}: {_number(estimate.value)}  # {comment}")
-    b = noise.estimates["B"]
-    if b.value is not None:
+            lines.append(f"{key}: {_number(combined[parameter])}  # {comment}")
+    if combined["B"] is not None:
         lines.append(
-            f"# {sensor} bias instability B = {b.value:.4e} {_KALIBR_UNITS[sensor, 'B']} "
-            f"({b.how}): not a Kalibr parameter, for reference only"
+            f"# {sensor} bias instability B = {combined['B']:.4e} {_KALIBR_UNITS[sensor, 'B']} "
+            f"({_how(axes, 'B', how)}): not a Kalibr parameter, for reference only"
         )
     return lines
 
 
-def _kept_kalibr_lines(sensor: str, existing: dict) -> tuple[list[str], str | None]:
-    keys = [f"{sensor}_{key}" for key in _KALIBR_KEYS.values()]
-    values = {
-        key: existing[key]
-        for key in keys
-        if isinstance(existing.get(key), int | float) and not isinstance(existing[key], bool)
-    }
-    if not values:
+def _kept_kalibr_lines(sensor: str, axes: dict, how: str) -> list[str]:
+    if not axes:
         return [
             f"# {sensor.capitalize()}s: not measured yet; run 'bayescal noise' on one of "
             "their channels with '--export kalibr' and this file to add them",
-        ], None
-    notes = existing.get("bayescal", {}) if isinstance(existing.get("bayescal"), dict) else {}
-    origin = notes.get(sensor)
-    lines = [
-        f"# {sensor.capitalize()}s: kept from the file as it was"
-        + (f" ({origin})" if isinstance(origin, str) else "")
-    ]
-    units = {f"{sensor}_{key}": _KALIBR_UNITS[sensor, p] for p, key in _KALIBR_KEYS.items()}
-    lines += [f"{key}: {_number(float(value))}  # [{units[key]}]" for key, value in values.items()]
-    return lines, f"{sensor} entries kept from the existing file"
+        ]
+    _, combined = _axes_summary(sensor, axes, how)
+    described = "; ".join(
+        entry["from"]
+        + (
+            f", bias instability B = {entry['B']:.4e} {_KALIBR_UNITS[sensor, 'B']}"
+            if _is_value(entry.get("B"))
+            else ""
+        )
+        for entry in axes.values()
+    )
+    lines = [f"# {sensor.capitalize()}s: kept from the file as it was ({described})"]
+    for parameter, key in _KALIBR_KEYS.items():
+        if combined[parameter] is not None:
+            lines.append(
+                f"{sensor}_{key}: {_number(combined[parameter])}  "
+                f"# [{_KALIBR_UNITS[sensor, parameter]}]"
+            )
+    return lines
 
 
 def kalibr_yaml(
-    noise: SensorNoise, existing: dict | None = None, topic: str | None = None
+    noise: SensorNoise,
+    existing: dict | None = None,
+    topic: str | None = None,
+    combine_axes: str = "largest",
 ) -> tuple[str, str | None]:
-    """Kalibr's imu.yaml with ``noise``'s sensor filled in and the other sensor's entries
-    kept from ``existing`` (a parsed imu.yaml); also a note on what was kept, or None."""
+    """Kalibr's imu.yaml with ``noise``'s axis added to its sensor's (one value per sensor
+    covering every axis exported: ``combine_axes`` "largest" or "rms"), the other sensor's
+    entries kept from ``existing`` (a parsed imu.yaml); also a note on what was kept, or
+    None."""
     existing = existing or {}
     other_sensor = next(s for s in SENSORS if s != noise.sensor)
-    blocks = {noise.sensor: _kalibr_sensor_lines(noise)}
-    blocks[other_sensor], kept = _kept_kalibr_lines(other_sensor, existing)
+    # The other sensor as the file has it; this sensor's axes that bayescal recorded (values
+    # without bayescal's notes are replaced by the measured ones).
+    axes = {
+        other_sensor: _kalibr_axes(other_sensor, existing),
+        noise.sensor: _kalibr_axes(noise.sensor, existing, recorded_only=True),
+    }
+    axes[noise.sensor].pop(noise.channel, None)
+    earlier = set(axes[noise.sensor])
+    axes[noise.sensor][noise.channel] = _axis_entry(noise)
+    blocks = {
+        noise.sensor: _kalibr_sensor_lines(noise.sensor, axes[noise.sensor], combine_axes),
+        other_sensor: _kept_kalibr_lines(other_sensor, axes[other_sensor], combine_axes),
+    }
+    kept_notes = []
+    if axes[other_sensor]:
+        kept_notes.append(f"{other_sensor} entries kept from the existing file")
+    if earlier:
+        kept_notes.append(
+            f"{noise.sensor} axes {', '.join(sorted(earlier))} kept beside {noise.channel} "
+            f"({combine_axes} of the {len(axes[noise.sensor])} axes)"
+        )
     topic_comment = "the IMU topic of the bag"
     if topic is None:
         topic = existing.get("rostopic") if isinstance(existing.get("rostopic"), str) else None
         topic_comment = "kept from the file as it was"
     if topic is None:
         topic, topic_comment = _PLACEHOLDER_TOPIC, "PLACEHOLDER: set the IMU topic of your bag"
-    notes = existing.get("bayescal") if isinstance(existing.get("bayescal"), dict) else {}
-    origins = {s: notes[s] for s in SENSORS if isinstance(notes.get(s), str)}
-    if kept is None:
-        origins.pop(other_sensor, None)
-    origin = [f"{noise.channel} of {noise.source} at {noise.rate_hz:.6g} Hz"]
-    origin += [f"{name}: {noise.estimates[name].how}" for name in ("N", "K")]
-    b = noise.estimates["B"]
-    if b.value is not None:
-        origin.append(f"bias instability B = {b.value:.4e} {_KALIBR_UNITS[noise.sensor, 'B']}")
-    origins[noise.sensor] = "; ".join(origin)
     lines = [
         f"# Kalibr IMU configuration (imu.yaml), written by bayescal {version('bayescal')}.",
         "# Kalibr's noise model is continuous-time (Kalibr wiki, IMU Noise Model):",
@@ -346,9 +495,10 @@ def kalibr_yaml(
         "#                     [unit/s/sqrt(Hz)] -- NOT the bias instability B (flicker), which",
         "#                     Kalibr does not model; B is given in a comment for reference.",
         "# Kalibr discretises them with update_rate itself: sigma_d = N*sqrt(rate),",
-        "# sigma_bd = K/sqrt(rate). One value per sensor applies to all three axes. The wiki",
-        "# advises inflating them for real-world calibration (unmodelled effects); bayescal",
-        "# gives the measured values, uninflated.",
+        "# sigma_bd = K/sqrt(rate). One value per sensor applies to all three axes: with",
+        "# several axes exported, it is the largest of them or their RMS, as said below. The",
+        "# wiki advises inflating them for real-world calibration (unmodelled effects);",
+        "# bayescal gives the measured values, uninflated.",
         "",
         *blocks["accelerometer"],
         "",
@@ -357,21 +507,29 @@ def kalibr_yaml(
         f"rostopic: {json.dumps(topic)}  # {topic_comment}",
         f"update_rate: {float(noise.rate_hz)!r}  # Hz, the sample rate of {noise.channel}",
     ]
-    other = origins.get(other_sensor)
-    if other and kept and f" at {noise.rate_hz:.6g} Hz" not in other:
-        lines.append(f"# the {other_sensor} entries were measured at another rate: {other}")
-    lines += ["", "# Where the values come from (ignored by Kalibr):", "bayescal:"]
-    lines += [
-        f"  {sensor}: {json.dumps(origins[sensor])}" for sensor in SENSORS if sensor in origins
-    ]
-    return "\n".join(lines) + "\n", kept
+    rates = {
+        f"{entry['from']}"
+        for sensor in SENSORS
+        for entry in axes[sensor].values()
+        if _is_value(entry.get("rate_hz")) and abs(entry["rate_hz"] / noise.rate_hz - 1) > 1e-6
+    }
+    if rates:
+        lines.append(f"# measured at another rate than update_rate: {'; '.join(sorted(rates))}")
+    lines += ["", "# Where the values come from, axis by axis (ignored by Kalibr):", "bayescal:"]
+    for sensor in SENSORS:
+        if axes[sensor]:
+            record = {"combined": combine_axes, "axes": axes[sensor]}
+            lines.append(f"  {sensor}: {json.dumps(to_jsonable(record), ensure_ascii=False)}")
+    return "\n".join(lines) + "\n", "; ".join(kept_notes) or None
 
 
 # --- MATLAB ------------------------------------------------------------------------------
 
+_MATLAB_AXES = "% bayescal axes: "
+
 
 def _read_matlab(path: Path, argument: str) -> dict:
-    """The other sensor's block of a script bayescal wrote, by sensor."""
+    """The blocks of a script bayescal wrote, by sensor, with the axes each covers."""
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
@@ -386,24 +544,39 @@ def _read_matlab(path: Path, argument: str) -> dict:
         start, end = f"%% {sensor}:", f"%% end of {sensor}"
         if start in text and end in text:
             begin = text.index(start)
-            blocks[sensor] = text[begin : text.index(end, begin) + len(end)]
+            block = text[begin : text.index(end, begin) + len(end)]
+            axes = {}
+            for line in block.splitlines():
+                if line.startswith(_MATLAB_AXES):
+                    try:
+                        axes = _valid_axes(json.loads(line[len(_MATLAB_AXES) :]))
+                    except json.JSONDecodeError:
+                        axes = {}
+            blocks[sensor] = {"text": block, "axes": axes}
     return blocks
 
 
-def _matlab_block(noise: SensorNoise) -> str:
+def _matlab_block(
+    noise: SensorNoise, axes: dict | None = None, combine_axes: str = "largest"
+) -> str:
     sensor, variable = noise.sensor, _MATLAB_VARIABLE[noise.sensor]
+    axes = axes or {noise.channel: _axis_entry(noise)}
+    summary, combined = _axes_summary(sensor, axes, combine_axes)
     lines = [
-        f"%% {sensor}: {noise.channel} of {noise.source}, {noise.rate_hz:.6g} Hz",
+        f"%% {sensor}: {', '.join(axes)}",
+        *(f"%{line[1:]}" for line in summary),
         f"{variable} = {_MATLAB_CLASS[sensor]};",
     ]
     for parameter in ("N", "B", "K"):
-        estimate = noise.estimates[parameter]
         prop = _MATLAB_PROPERTY[parameter]
-        comment = f"{_MATLAB_UNITS[sensor, parameter]}, {_NAMES[parameter]}: {estimate.describe()}"
-        if estimate.value is None:
+        comment = (
+            f"{_MATLAB_UNITS[sensor, parameter]}, {_NAMES[parameter]}: "
+            f"{_how(axes, parameter, combine_axes)}"
+        )
+        if combined[parameter] is None:
             lines.append(f"% {variable}.{prop} not set: not estimated ({comment})")
         else:
-            lines.append(f"{variable}.{prop} = {_number(estimate.value)}; % {comment}")
+            lines.append(f"{variable}.{prop} = {_number(combined[parameter])}; % {comment}")
     temperature_unit = _MATLAB_UNITS[sensor, "T"]
     if noise.temperature_bias is not None and math.isfinite(noise.temperature_bias):
         lines.append(
@@ -416,25 +589,38 @@ def _matlab_block(noise: SensorNoise) -> str:
             "'bayescal noise'; 'bayescal thermal fit' estimates the bias against temperature"
         )
     lines.append(f"{variable}_sample_rate = {float(noise.rate_hz)!r}; % Hz")
+    lines.append(_MATLAB_AXES + json.dumps(to_jsonable(axes), ensure_ascii=False))
     lines.append(f"%% end of {sensor}")
     return "\n".join(lines)
 
 
-def matlab_script(noise: SensorNoise, existing: dict | None = None) -> tuple[str, str | None]:
-    """A MATLAB script setting ``gyroparams``/``accelparams`` for ``noise``'s sensor, with
-    the other sensor's block kept from ``existing`` (blocks by sensor); also a note on what
-    was kept, or None."""
+def matlab_script(
+    noise: SensorNoise, existing: dict | None = None, combine_axes: str = "largest"
+) -> tuple[str, str | None]:
+    """A MATLAB script setting ``gyroparams``/``accelparams`` for ``noise``'s sensor (one value
+    covering every axis exported to it: ``combine_axes`` "largest" or "rms"), with the other
+    sensor's block kept from ``existing`` (blocks by sensor); also a note on what was kept,
+    or None."""
     existing = existing or {}
     other_sensor = next(s for s in SENSORS if s != noise.sensor)
-    blocks = {noise.sensor: _matlab_block(noise)}
-    kept = None
+    previous = existing.get(noise.sensor, {}).get("axes", {}) if existing else {}
+    axes = {name: entry for name, entry in previous.items() if name != noise.channel}
+    earlier = sorted(axes)
+    axes[noise.channel] = _axis_entry(noise)
+    blocks = {noise.sensor: _matlab_block(noise, axes, combine_axes)}
+    kept = []
     if other_sensor in existing:
-        blocks[other_sensor] = existing[other_sensor]
-        kept = f"{other_sensor} block kept from the existing file"
+        blocks[other_sensor] = existing[other_sensor]["text"]
+        kept.append(f"{other_sensor} block kept from the existing file")
     else:
         blocks[other_sensor] = (
             f"% {other_sensor}: not measured yet; run 'bayescal noise' on one of its "
             "channels with '--export matlab' and this file to add it"
+        )
+    if earlier:
+        kept.append(
+            f"{noise.sensor} axes {', '.join(earlier)} kept beside {noise.channel} "
+            f"({combine_axes} of the {len(axes)} axes)"
         )
     header = [
         f"% IMU noise parameters for MATLAB's imuSensor, {_MATLAB_MARK} {version('bayescal')}.",
@@ -442,10 +628,11 @@ def matlab_script(noise: SensorNoise, existing: dict | None = None) -> tuple[str
         "% accelparams): NoiseDensity = white noise N of IEEE Std 952, BiasInstability = bias",
         "% instability B (flicker floor / 0.664), RandomWalk = rate random walk K, as in",
         "% MathWorks' example 'Inertial Sensor Noise Analysis Using Allan Variance'.",
-        "% One value per sensor applies to all three axes. Use, once both sensors are set:",
+        "% One value per sensor applies to all three axes: with several axes exported, it is",
+        "% the largest of them or their RMS, as said in each block. Use, once both are set:",
         "%   imu = imuSensor('accel-gyro', 'SampleRate', gyro_sample_rate, ...",
         "%                   'Gyroscope', gyro, 'Accelerometer', accel);",
         "",
     ]
     body = "\n\n".join(blocks[sensor] for sensor in ("gyroscope", "accelerometer"))
-    return "\n".join(header) + body + "\n", kept
+    return "\n".join(header) + body + "\n", "; ".join(kept) or None

@@ -77,8 +77,21 @@ class ChannelAnalysis:
         return self.data.unit
 
     @property
+    def misfits(self) -> list[str]:
+        """Where the fitted model does not describe the record."""
+        checks = self.result.get("bayesian", {}).get("fit_checks", [])
+        return [check["misfit"] for check in checks if check["misfit"]]
+
+    @property
+    def failures(self) -> list[str]:
+        """The failed sampler checks, then the misfits."""
+        if self.fit is None:
+            return []
+        return [*self.fit.diagnostics.failures, *(f"model misfit: {m}" for m in self.misfits)]
+
+    @property
     def passed(self) -> bool:
-        return self.fit is None or bool(self.fit.diagnostics.passed)
+        return not self.failures
 
 
 # ---------------------------------------------------------------------------------------------
@@ -803,16 +816,22 @@ def _health_table(analyses: list[ChannelAnalysis]) -> str:
         criterion = "met" if d.converged else "<b>not met</b>"
         status = (
             "<span class='ok'>passed</span>"
-            if d.passed
-            else "<span class='bad'>FAILED: " + _esc("; ".join(d.failures)) + "</span>"
+            if analysis.passed
+            else "<span class='bad'>FAILED: " + _esc("; ".join(analysis.failures)) + "</span>"
+        )
+        fits = (
+            "<span class='ok'>yes</span>"
+            if not analysis.misfits
+            else "<span class='bad'>MISFIT</span>"
         )
         rows.append(
-            f"<tr{' class=failed' if not d.passed else ''}><td>{_esc(analysis.channel)}</td>"
+            f"<tr{' class=failed' if not analysis.passed else ''}><td>{_esc(analysis.channel)}</td>"
             f"<td class='num'>{d.n_steps}&nbsp;steps × {d.n_walkers}&nbsp;walkers</td>"
             f"<td class='num'>{_num(tau, 3)} ({criterion})</td>"
             f"<td class='num'>{_num(rhat, 4)}</td><td class='num'>{_num(ess, 4)}</td>"
             f"<td class='num'>{_num(d.acceptance_fraction, 3)}</td>"
-            f"<td>{'yes' if d.map_converged else '<b>no</b>'}</td><td>{status}</td></tr>"
+            f"<td>{'yes' if d.map_converged else '<b>no</b>'}</td><td>{fits}</td>"
+            f"<td>{status}</td></tr>"
         )
     if not rows:
         return "<p>No posterior was sampled (classical analysis only).</p>"
@@ -821,6 +840,7 @@ def _health_table(analyses: list[ChannelAnalysis]) -> str:
         "<th>autocorrelation time [steps] (chain &gt; 50 τ)</th>"
         "<th>max R-hat [dimensionless] (≤ 1.01)</th><th>min bulk ESS [draws] (≥ 400)</th>"
         "<th>acceptance [fraction of proposals] (0.1–0.8)</th><th>MAP converged</th>"
+        "<th>model fits the record (Allan, spectrum, lag-1)</th>"
         "<th>result</th></tr></thead><tbody>" + "".join(rows) + "</tbody></table>"
     )
 
@@ -921,7 +941,7 @@ def _channel_section(analysis: ChannelAnalysis, findings: dict | None) -> str:
         parts.append(
             "<div class='alarm'><b>POSTERIOR CHECKS FAILED — do not use the Bayesian numbers "
             "of this channel:</b><ul>"
-            + "".join(f"<li>{_esc(f)}</li>" for f in analysis.fit.diagnostics.failures)
+            + "".join(f"<li>{_esc(f)}</li>" for f in analysis.failures)
             + "</ul></div>"
         )
     parts.append(_t_interval_html(result))
@@ -992,10 +1012,7 @@ def build_report(
             "<div class='alarm'><h2>HEALTH CHECK FAILED</h2><p>The posterior of "
             + ", ".join(f"<b>{_esc(a.channel)}</b>" for a in failed)
             + " failed its checks; do not use those Bayesian numbers:</p><ul>"
-            + "".join(
-                f"<li>{_esc(a.channel)}: {_esc('; '.join(a.fit.diagnostics.failures))}</li>"
-                for a in failed
-            )
+            + "".join(f"<li>{_esc(a.channel)}: {_esc('; '.join(a.failures))}</li>" for a in failed)
             + "</ul></div>"
         )
     parts.append("<h2>Summary</h2>")

@@ -4,11 +4,12 @@ of ``bayescal noise`` and as the table it prints."""
 import math
 from importlib.metadata import version
 
+from ..capabilities._noise import NoiseFit
 from ..classical._noise import ClassicalNoise, SlopeReading
 from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN_ESS
 from ..inference._noise_posterior import NoisePosterior
 from ..models._noise_model import parameter_unit
-from ..models._terms import TERM_OF_PARAMETER
+from ..models._terms import FILTER_SHAPE_OF_TERM, TERM_OF_PARAMETER
 from ..recording._units import display_values
 
 # Why a classical number and the posterior can disagree, by parameter.
@@ -20,12 +21,23 @@ _WHY = {
     "Q": "the -1 stretch of the Allan curve also carries white noise",
 }
 
-_READ_AT = {
-    "Q": "-1 line at tau = sqrt(3) s",
-    "N": "-1/2 line at tau = 1 s",
-    "B": "flat floor / 0.664",
-    "K": "+1/2 line at tau = 3 s",
+_LINE = {
+    "Q": "-1 line, extrapolated to tau = sqrt(3) s",
+    "N": "-1/2 line, extrapolated to tau = 1 s",
+    "K": "+1/2 line, extrapolated to tau = 3 s",
 }
+
+
+def _read_at(parameter: str, reading: SlopeReading) -> str:
+    """Where a reading was taken, in words: the stretch of the curve it came from."""
+    if reading.kind == "upper_bound":
+        return f"upper bound, tightest at tau = {reading.tau_s:.3g} s: {reading.reason}"
+    if parameter == "B":
+        return f"flat floor at tau = {reading.tau_s:.3g} s / 0.664"
+    return (
+        f"stretch of slope {reading.local_slope:+.2f} at tau = {reading.tau_s:.3g} s on the "
+        f"{_LINE[parameter]}"
+    )
 
 
 def _reading(parameter: str, reading: SlopeReading, unit: str) -> dict:
@@ -38,7 +50,7 @@ def _reading(parameter: str, reading: SlopeReading, unit: str) -> dict:
         "kind": reading.kind,
         "tau_s": reading.tau_s,
         "local_slope": reading.local_slope,
-        "read_at": _READ_AT[parameter],
+        "read_at": _read_at(parameter, reading),
         "display": {
             label: {
                 "value": value,
@@ -124,10 +136,15 @@ def comparison_notes(classical: ClassicalNoise, fit: NoisePosterior, unit: str) 
         if name in fit.parameters
     ]
     if ratio > 2:
+        why = (
+            f"the model lets the bias wander ({', '.join(slow)})"
+            if slow
+            else "the model's output filter correlates neighbouring samples"
+        )
         notes.append(
             f"bias: the posterior's uncertainty is {ratio:.3g}x the Student-t "
-            f"interval's: the model lets the bias wander ({', '.join(slow)}), which the "
-            "t-interval, treating the samples as independent, ignores"
+            f"interval's: {why}, which the t-interval, treating the samples as "
+            "independent, ignores"
         )
     if abs(bias.mean - classical.bias) > 2 * math.hypot(bias.sd, t_sd):
         notes.append(
@@ -142,10 +159,17 @@ def comparison_notes(classical: ClassicalNoise, fit: NoisePosterior, unit: str) 
         unit_of_parameter = parameter_unit(name, unit)
         if reading.kind == "upper_bound":
             if posterior.q05 > reading.ci_high:
+                filters = [term for term in fit.terms if term in FILTER_SHAPE_OF_TERM]
+                why = (
+                    f"the output filter ({filters[0]}) lowers the Allan curve at short tau, so "
+                    "the bound read there is too low: the classical reading is wrong here"
+                    if filters
+                    else "check the model's terms"
+                )
                 notes.append(
                     f"{name}: the posterior (5 % quantile {posterior.q05:.3g} "
                     f"{unit_of_parameter}) lies above the bound the Allan curve allows "
-                    f"({reading.ci_high:.3g}): check the model's terms"
+                    f"({reading.ci_high:.3g}): {why}"
                 )
             continue
         if reading.ci_low > posterior.q95 or reading.ci_high < posterior.q05:
@@ -165,10 +189,12 @@ def _normal_quantile(confidence: float) -> float:
 
 
 def noise_result(
-    data, classical: ClassicalNoise, window: dict, fit: NoisePosterior | None = None
+    data, classical: ClassicalNoise, window: dict, noise: NoiseFit | None = None
 ) -> dict:
     """The JSON document of ``bayescal noise`` (contract in the README). ``data`` names the
-    channel: its ``source``, ``channel``, ``unit`` and ``notes`` (a Channel or a NoiseFit)."""
+    channel: its ``source``, ``channel``, ``unit`` and ``notes`` (a Channel or a NoiseFit);
+    ``noise`` is the Bayesian fit, with its checks against the record and how its terms were
+    chosen."""
     unit = data.unit
     allan = classical.allan
     half_width = (classical.bias_ci_high - classical.bias_ci_low) / 2
@@ -222,9 +248,32 @@ def noise_result(
             },
         },
     }
-    if fit is not None:
-        result["bayesian"] = _bayesian_block(fit, unit)
-        result["bayesian"]["comparison"] = comparison_notes(classical, fit, unit)
+    if noise is not None:
+        bayesian = result["bayesian"] = _bayesian_block(noise.fit, unit)
+        if noise.selection is not None:
+            bayesian["term_selection"] = {
+                "method": "Laplace evidence, forward then backward from white noise",
+                "threshold_log_bayes_factor": noise.selection.threshold,
+                "candidates": noise.selection.table,
+            }
+        if noise.lsb > 0:
+            bayesian["rounding"] = {
+                "lsb": noise.lsb,
+                "unit": unit,
+                "white_floor": noise.lsb / math.sqrt(12 * noise.rate_hz),
+                "output_white_level": noise.output_white_level,
+                "density_unit": parameter_unit("N", unit),
+                "explanation": "the samples sit on a grid of this step: their rounding error "
+                "(LSB^2/12 per sample) is a known white floor in the model, so N is the "
+                "sensor's white noise without it; the output's white level adds it back",
+            }
+        bayesian["fit_checks"] = [
+            {key: check[key] for key in ("name", "statistic", "p_value", "location", "passed")}
+            | {"misfit": check["misfit"]}
+            for check in noise.checks
+        ]
+        bayesian["fits"] = noise.fits
+        bayesian["comparison"] = comparison_notes(classical, noise.fit, unit)
     return result
 
 
@@ -285,12 +334,7 @@ def noise_text(result: dict) -> str:
         extra = "".join(
             f" = {_number(item[shown_key])} {label}" for label, item in reading["display"].items()
         )
-        how = (
-            reading["read_at"]
-            if reading["kind"] == "reading"
-            else "no stretch of its slope: upper bound from the whole curve"
-        )
-        lines.append(f"  {parameter}  {shown}{extra}   ({how})")
+        lines.append(f"  {parameter}  {shown}{extra}   ({reading['read_at']})")
     if "bayesian" in result:
         lines += _side_by_side(result)
     if result["notes"]:
@@ -305,8 +349,23 @@ def _side_by_side(result: dict) -> list[str]:
         "",
         f"  classical ({percent} intervals) and Bayesian (posterior mean, 90% interval; "
         f"MAP +- Laplace sd); terms: {', '.join(bayesian['terms'])}",
-        f"  {'':6}{'unit':<16}{'classical':<38}{'Bayesian':<40}MAP",
     ]
+    if "term_selection" in bayesian:
+        selection = bayesian["term_selection"]
+        lines.append(
+            "  terms chosen by evidence (kept at log BF >= "
+            f"{selection['threshold_log_bayes_factor']:.2f}):"
+        )
+        lines += [f"    {row['term']:<20}{row['reason']}" for row in selection["candidates"]]
+    if "rounding" in bayesian:
+        rounding = bayesian["rounding"]
+        lines.append(
+            f"  samples on a grid of {_number(rounding['lsb'])} {rounding['unit']}: rounding's "
+            f"white floor {_number(rounding['white_floor'])} {rounding['density_unit']} kept "
+            f"out of N (output's white level {_number(rounding['output_white_level'])})"
+        )
+    width = 2 + max(6, *(len(name) for name in bayesian["parameters"]))
+    lines.append(f"  {'':{width}}{'unit':<16}{'classical':<38}{'Bayesian':<40}MAP")
     for name, entry in bayesian["parameters"].items():
         if name == "bias":
             bias = classical["bias"]
@@ -325,13 +384,13 @@ def _side_by_side(result: dict) -> list[str]:
             shown = "-"
         posterior = f"{_number(entry['mean'])} [{_number(entry['q05'])}, {_number(entry['q95'])}]"
         lines.append(
-            f"  {name:<6}{entry['unit']:<16}{shown:<38}{posterior:<40}"
+            f"  {name:<{width}}{entry['unit']:<16}{shown:<38}{posterior:<40}"
             f"{_number(entry['map'])} +- {_number(entry['map_sd'])}"
         )
     for name, entry in bayesian["parameters"].items():
         for label, shown in entry.get("display", {}).items():
             lines.append(
-                f"  {name:<6}{label:<16}{'':<38}{_number(shown['mean'])} "
+                f"  {name:<{width}}{label:<16}{'':<38}{_number(shown['mean'])} "
                 f"[{_number(shown['q05'])}, {_number(shown['q95'])}]"
             )
     diagnostics = bayesian["diagnostics"]
@@ -347,6 +406,19 @@ def _side_by_side(result: dict) -> list[str]:
     else:
         lines.append("  POSTERIOR CHECKS FAILED — do not use these Bayesian numbers:")
         lines += [f"    - {failure}" for failure in diagnostics["failures"]]
+    if bayesian["fits"]:
+        lines.append(
+            "  the model fits the record: "
+            + ", ".join(check["name"].replace("_", " ") for check in bayesian["fit_checks"])
+            + " within the model's band"
+        )
+    else:
+        lines.append("  MODEL MISFIT — the model does not describe this record:")
+        lines += [f"    - {check['misfit']}" for check in bayesian["fit_checks"] if check["misfit"]]
+        lines.append(
+            "    see bayescal discover for what the model leaves out"
+            + ("" if "term_selection" in bayesian else ", or let the record choose: --terms auto")
+        )
     if bayesian["comparison"]:
         lines += ["", "  where they disagree:"] + [f"  - {note}" for note in bayesian["comparison"]]
     return lines

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .._errors import InputError
-from .._output import write_atomic, write_json, write_netcdf
+from .._output import file_stem, write_atomic, write_json, write_netcdf
 from ..capabilities._noise import fit_noise
 from ..inference._datatree import noise_datatree
 from ..models._terms import parse_terms
@@ -28,7 +28,7 @@ from ._html import (
 )
 from ._noise import noise_result
 
-DEFAULT_TERMS = "white,bias_instability,rate_random_walk"
+DEFAULT_TERMS = "auto"
 
 
 @dataclass
@@ -73,7 +73,7 @@ def analyse_channel(
     )
     window = {"start_s": data.start_s, "stop_s": data.stop_s, **(window or {})}
     window_notes = window.pop("notes", [])
-    result = noise_result(fit, fit.classical, window, fit.fit)
+    result = noise_result(fit, fit.classical, window, fit)
     result["notes"] = list(window_notes) + result["notes"]
     analysis = ChannelAnalysis(data=data, classical=fit.classical, result=result, fit=fit.fit)
     posterior_bands(analysis, seed=seed)
@@ -102,12 +102,16 @@ def report_recording(
     gaps: str = "error",
     start: float | None = None,
     stop: float | None = None,
+    options: dict | None = None,
     window: dict | None = None,
     discoveries=None,
     progress: bool = False,
 ) -> ReportOutcome:
     """Analyse ``channels`` of ``table`` and write the page, its JSON and the posteriors into
     ``folder``.
+
+    ``options``: channel -> more arguments of :func:`~bayescal.recording._recording.
+    prepare_channel` for it (its ``unit``, its ``scale``).
 
     ``discoveries``: discovery findings to show on the page and keep in the JSON, either a
     dict channel -> findings, or a function ``(table, data) -> findings or None`` called for
@@ -134,6 +138,7 @@ def report_recording(
             start=start,
             stop=stop,
             gaps=gaps,
+            **(options or {}).get(channel, {}),
         )
         for channel in channels
     ]
@@ -145,7 +150,9 @@ def report_recording(
 
         bar = tqdm(total=len(prepared) + 1, desc="report", unit="step", file=sys.stderr)
     settings = {
-        "terms": ", ".join(parsed_terms),
+        "terms": "chosen by evidence per channel (auto)"
+        if parsed_terms == "auto"
+        else ", ".join(parsed_terms),
         "sensor card": card.name if card else "none (weakly informative priors)",
         "confidence of classical intervals": f"{100 * confidence:g} %",
         "seed": str(seed),
@@ -215,7 +222,7 @@ def write_report(
     for analysis in analyses:
         if analysis.fit is None:
             continue
-        path = folder / f"{stem}_{analysis.channel}_posterior.nc"
+        path = folder / f"{stem}_{file_stem(analysis.channel)}_posterior.nc"
         tree = noise_datatree(
             analysis.fit, analysis.unit, channel=analysis.channel, source=analysis.data.source
         )

@@ -92,8 +92,15 @@ def two_position_result(calibration: TwoPositionCalibration, found_by: str) -> d
                 "rhat": noise.diagnostics.rhat,
                 "ess_bulk": noise.diagnostics.ess_bulk,
             },
+            "fit_checks": [
+                {key: check[key] for key in ("name", "p_value", "location", "passed", "misfit")}
+                for check in bayesian.checks
+            ],
+            "fits": not bayesian.misfits,
             "comparison": _comparison(classical, parameters, confidence),
         }
+        if bayesian.selection is not None:
+            result["bayesian"]["term_selection"] = bayesian.selection.table
     return result
 
 
@@ -152,5 +159,10 @@ def two_position_text(result: dict) -> str:
                 else "FAILED: " + "; ".join(diagnostics["failures"])
             )
         )
+        if bayesian["fits"]:
+            lines.append("  the noise model fits the sections (Allan deviation, spectrum, lag-1)")
+        else:
+            lines.append("  NOISE MODEL MISFIT — its intervals do not describe these sections:")
+            lines += [f"    - {c['misfit']}" for c in bayesian["fit_checks"] if c["misfit"]]
         lines += [f"  - {note}" for note in bayesian["comparison"]]
     return "\n".join(lines)

@@ -77,6 +77,10 @@ class Effect(eqx.Module):
     """What the physics is and how it shows, for a user."""
     located_by: eqx.AbstractClassVar[str]
     """The check of a fitted model that points to this effect when the model lacks it."""
+    band: eqx.AbstractClassVar[str]
+    """Where it shows: "low" (slow drifts, up to the record's length), "line" (a spectral
+    line), "high" (the shape of the spectrum toward Nyquist) or "samples" (the samples'
+    distribution). Effects of one band can look alike on a short record; of two, never."""
     rank: ClassVar[int] = 0
     """Where the effect is listed among a model's terms: noise terms first, in the order
     they were added, then deterministic terms and sample effects by rank."""
@@ -101,6 +105,12 @@ class Effect(eqx.Module):
         """This effect's parameters from the final posterior: name -> summary with its unit
         and interval."""
         return {}
+
+    @property
+    def decided_before_search(self) -> bool:
+        """Whether the effect's parameters were fixed before the search (a grid's step, an
+        output filter's shape), so that they are reported without a final posterior."""
+        return False
 
     def location(self, finding, checks: dict) -> dict:
         """Where the effect was located: the baseline check that points to it."""

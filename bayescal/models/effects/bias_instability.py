@@ -54,6 +54,7 @@ class BiasInstability(NoiseTerm):
         "the Allan deviation flattens into a floor."
     )
     located_by: ClassVar[str] = "allan_deviation"
+    band: ClassVar[str] = "low"
     parameter: ClassVar[str] = "B"
     long_memory: ClassVar[bool] = True
 

@@ -61,6 +61,7 @@ class EarthRotation(Effect):
         "offset set by the latitude and the axis's direction."
     )
     located_by: ClassVar[str] = "residual_time"
+    band: ClassVar[str] = "low"
 
     def simulate(self, n: int, latitude_deg: float, axis: str, unit: str) -> np.ndarray:
         """The Earth rate a static gyro along ``axis`` at ``latitude_deg`` reads, ``n`` times."""

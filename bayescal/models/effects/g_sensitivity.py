@@ -20,6 +20,7 @@ class GSensitivity(RegressionTerm):
         "channel."
     )
     located_by: ClassVar[str] = "residual_vs_accelerometer"
+    band: ClassVar[str] = "low"
     rank: ClassVar[int] = 4
     max_columns: ClassVar[int] = MAX_COUNT
     covariate: str

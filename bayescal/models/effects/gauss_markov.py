@@ -21,6 +21,7 @@ class GaussMarkov(NoiseTerm):
         "which leaves a bump in the Allan deviation and a Lorentzian spectrum."
     )
     located_by: ClassVar[str] = "allan_deviation"
+    band: ClassVar[str] = "low"
     parameter: ClassVar[str] = "sigma_gm"
     long_memory: ClassVar[bool] = True
     time_constant_s: float

@@ -6,18 +6,23 @@ from typing import ClassVar
 import numpy as np
 from scipy import stats
 
+from ...recording._levels import discrete_step
 from ._base import Effect
 
 
 def robust_scores(values: np.ndarray) -> np.ndarray:
     """Each sample's departure from the mean of its two neighbours, in units of the robust
-    spread of that departure: Gaussian for any noise that is smooth or white at the sample
-    scale, and a glitch of one sample stands out at its own index."""
+    spread of that departure (at least the grid's step, for samples on a grid): Gaussian for
+    any noise that is smooth or white at the sample scale, and a glitch of one sample stands
+    out at its own index."""
     filled = np.where(np.isfinite(values), values, np.nanmedian(values))
     detail = np.zeros_like(filled)
     detail[1:-1] = filled[1:-1] - 0.5 * (filled[:-2] + filled[2:])
     detail[0], detail[-1] = filled[0] - filled[1], filled[-1] - filled[-2]
     spread = 1.4826 * np.median(np.abs(detail - np.median(detail)))
+    # On a coarse grid the median absolute deviation counts levels, not spread (it is 0 or
+    # one step for noise of under a step): a detail of one LSB is never a glitch.
+    spread = max(spread, discrete_step(values))
     return detail / spread if spread > 0 else np.zeros_like(detail)
 
 
@@ -75,6 +80,7 @@ class Outliers(Effect):
         "Isolated glitches far outside the noise: the residual has heavier tails than a Gaussian."
     )
     located_by: ClassVar[str] = "tails"
+    band: ClassVar[str] = "samples"
     rank: ClassVar[int] = 6
 
     def simulate(

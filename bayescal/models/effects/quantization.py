@@ -8,7 +8,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from ... import _x64  # noqa: F401  (float64 before any JAX array)
-from ...recording._levels import discrete_step
 from ...recording._units import integral_unit
 from ._base import NoiseTerm, moving_average
 
@@ -22,22 +21,41 @@ class Quantization(NoiseTerm):
     name: ClassVar[str] = "quantization"
     explanation: ClassVar[str] = (
         "The output is rounded to the converter's resolution (LSB): the samples sit on "
-        "discrete levels and the Allan deviation falls as 1/tau at short tau."
+        "discrete levels, and the rounding adds white noise of LSB/sqrt(12) per sample; white "
+        "angle (velocity) noise beyond it, IEEE 952's Q, makes the spectrum rise toward "
+        "Nyquist and the Allan deviation fall as 1/tau at short tau."
     )
     located_by: ClassVar[str] = "discrete_levels"
+    band: ClassVar[str] = "high"
     parameter: ClassVar[str] = "Q"
     long_memory: ClassVar[bool] = False
+    lsb: float = 0.0
+    """The grid the samples sit on, when discovery named it from the samples themselves (its
+    rounding, LSB^2 / 12 per sample, is then a known white floor of every model); zero for
+    the white angle noise Q, the slot term."""
 
     @staticmethod
     def unit(channel_unit: str) -> str:
         return integral_unit(channel_unit)
 
-    @classmethod
-    def propose(cls, search, current):
-        """Only for samples on a grid of levels."""
-        if discrete_step(search.data.values) > 0:
-            return super().propose(search, current)
-        return None
+    def describe(self, finding, posterior, search) -> dict:
+        """The grid's LSB and what its rounding adds (white, per sample and as a density), or
+        the white angle noise Q beyond it."""
+        if self.lsb == 0:
+            return super().describe(finding, posterior, search)
+        unit, rate = search.data.unit, search.data.rate_hz
+        return {
+            "lsb": {"value": self.lsb, "unit": unit},
+            "rounding_sd": {"value": self.lsb / math.sqrt(12.0), "unit": unit},
+            "rounding_density": {
+                "value": self.lsb / math.sqrt(12.0 * rate),
+                "unit": f"{unit}/sqrt(Hz)",
+            },
+        }
+
+    @property
+    def decided_before_search(self) -> bool:
+        return self.lsb > 0  # the grid's step, read from the samples
 
     @staticmethod
     def weight(Q):

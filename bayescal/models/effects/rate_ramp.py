@@ -17,6 +17,7 @@ class RateRamp(SlotTerm):
         "The bias drifts steadily in time, at a constant rate, independent of the temperature."
     )
     located_by: ClassVar[str] = "residual_time"
+    band: ClassVar[str] = "low"
     parameter: ClassVar[str] = "R"
 
     @staticmethod

@@ -21,6 +21,7 @@ class RateRandomWalk(NoiseTerm):
         "apart: the Allan deviation rises as the square root of tau."
     )
     located_by: ClassVar[str] = "allan_deviation"
+    band: ClassVar[str] = "low"
     parameter: ClassVar[str] = "K"
     long_memory: ClassVar[bool] = False
 

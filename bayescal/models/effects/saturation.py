@@ -152,6 +152,7 @@ class Saturation(Effect):
         "it are stuck on one value (the rail), which pulls the mean in and shrinks the spread."
     )
     located_by: ClassVar[str] = "rail"
+    band: ClassVar[str] = "samples"
     rank: ClassVar[int] = 5
 
     def simulate(self, values: np.ndarray, rail: float, bias: float) -> np.ndarray:

@@ -23,6 +23,7 @@ class Sinusoid(RegressionTerm):
         "spectrum at a fixed frequency."
     )
     located_by: ClassVar[str] = "spectral_line"
+    band: ClassVar[str] = "line"
     rank: ClassVar[int] = 3
     max_columns: ClassVar[int] = 2 * MAX_COUNT
     slow: ClassVar[bool] = False

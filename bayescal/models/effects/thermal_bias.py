@@ -22,6 +22,7 @@ class ThermalBias(RegressionTerm):
         "not time."
     )
     located_by: ClassVar[str] = "residual_vs_temperature"
+    band: ClassVar[str] = "low"
     rank: ClassVar[int] = 1
     max_columns: ClassVar[int] = MAX_DEGREE
     degree: int = 1

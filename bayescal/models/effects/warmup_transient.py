@@ -18,6 +18,7 @@ class WarmupTransient(RegressionTerm):
         "from the rest, and the departure decays."
     )
     located_by: ClassVar[str] = "residual_time"
+    band: ClassVar[str] = "low"
     rank: ClassVar[int] = 2
     max_columns: ClassVar[int] = 1
     time_constant_s: float

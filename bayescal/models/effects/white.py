@@ -25,6 +25,7 @@ class White(NoiseTerm):
         "of the Allan deviation (angle or velocity random walk)."
     )
     located_by: ClassVar[str] = "allan_deviation"
+    band: ClassVar[str] = "high"
     parameter: ClassVar[str] = "N"
     long_memory: ClassVar[bool] = False
 

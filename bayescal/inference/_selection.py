@@ -1,0 +1,232 @@
+"""Which noise terms a record holds: the model chosen by its evidence (``terms="auto"``).
+
+Why evidence, and how it is computed: each candidate term costs parameters the record may not
+constrain; the marginal likelihood p(y | model) weighs the fit it buys against the prior
+volume it spends (the Occam factor), so a term the record holds no trace of loses evidence and
+a flicker, a random walk or a low-pass that shapes the spectrum wins it by many units of log.
+The evidence is the Laplace approximation at the MAP — log p(y | theta*) + log p(theta*) +
+(d/2) log 2 pi - (1/2) log det H with the prior normalised — the same MAP and Hessian every fit
+computes (:func:`~bayescal.inference._optimize.maximum_a_posteriori`).
+
+Search: forward from white noise (the rounding floor of a gridded record included, it is
+known), adding at each step the candidate with the largest Bayes factor while that factor is
+decisive (log BF >= log 100, Jeffreys' scale; the bar discovery uses too); then backward,
+dropping any kept term whose Bayes factor against the model without it fell below the bar.
+The output filter's shapes (one-tap, decimation, Butterworth) compete for one place.
+
+Cost: every model of a family shares one compiled optimiser. A family is a
+:class:`~bayescal.models._noise_problem.NoiseProblem` holding every candidate's parameters;
+a model is a mask switching some off (a masked noise scale is zero, a masked filter passes
+everything). A masked coordinate's posterior is its normal prior, whose normalised density and
+Hessian cancel exactly in the Laplace evidence, so the evidence of a masked model is that of
+the model without those coordinates.
+"""
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import equinox as eqx
+import numpy as np
+
+from .._errors import InputError
+from ..models._level import LevelSummary
+from ..models._noise_problem import NoisePrior, NoiseProblem
+from ..models._terms import ALL_TERMS, CANDIDATE_TERMS, FILTER_SHAPE_OF_TERM, PARAMETERS_OF_TERM
+from ..models._whittle import SpectralSummary
+from ._noise_posterior import map_summary, noise_mode
+from ._optimize import Mode
+
+DECISIVE_LOG_BAYES_FACTOR = math.log(100.0)
+"""The evidence a term must add to be kept: decisive on Jeffreys' scale."""
+
+
+@dataclass(frozen=True)
+class TermTrial:
+    """What the evidence said of one candidate term.
+
+    ``log_bayes_factor`` is for the chosen model against it without the term (a kept term) or
+    for the chosen model with the term against it (a term left out); ``reason`` says so in
+    words."""
+
+    term: str
+    log_bayes_factor: float
+    kept: bool
+    reason: str
+
+
+@dataclass(frozen=True)
+class TermSelection:
+    """The terms chosen for a record (:func:`select_noise_terms`), and why."""
+
+    terms: tuple[str, ...]
+    """The chosen terms, white noise first in the canonical order."""
+    trials: tuple[TermTrial, ...]
+    """Every candidate, with its Bayes factor against the chosen model and the reason."""
+    log_evidence: float
+    """Laplace log evidence of the chosen model (up to the data's constant)."""
+    estimates: dict
+    """The chosen model's parameters at its MAP: name -> (value, Laplace sd), in their
+    units."""
+    threshold: float = DECISIVE_LOG_BAYES_FACTOR
+
+    @property
+    def table(self) -> list[dict]:
+        """One row per candidate: term, log Bayes factor, kept, reason."""
+        return [dataclasses.asdict(trial) for trial in self.trials]
+
+
+class _Families:
+    """The models of a record's term search, each fitted once: one compiled problem per
+    output-filter family, a mask per model."""
+
+    def __init__(self, spectral, level, prior_of, lsb: float):
+        self.spectral, self.level = spectral, level
+        self.prior_of, self.lsb = prior_of, lsb
+        self.problems: dict[str, NoiseProblem] = {}
+        self.evidence: dict[frozenset, float] = {}
+        self.fits: dict[frozenset, tuple[NoiseProblem, Mode]] = {}
+
+    def _family(self, terms) -> tuple[str, ...]:
+        """Every candidate's term, with the output filter of ``terms`` (one-tap by default)."""
+        filters = [t for t in terms if t in FILTER_SHAPE_OF_TERM] or ["output_filter"]
+        return ("white", *(t for t in CANDIDATE_TERMS if t not in FILTER_SHAPE_OF_TERM), *filters)
+
+    def log_evidence(self, terms: frozenset) -> float:
+        if terms not in self.evidence:
+            family = self._family(terms)
+            key = family[-1]
+            if key not in self.problems:
+                prior = self.prior_of(family)
+                self.problems[key] = NoiseProblem(
+                    self.spectral,
+                    self.level,
+                    prior,
+                    lsb=np.asarray(self.lsb),
+                    mask=np.ones(len(prior.parameters)),
+                )
+            problem = self.problems[key]
+            active = {p for term in terms for p in PARAMETERS_OF_TERM[term]}
+            mask = np.array([float(p in active) for p in problem.parameters])
+            masked = eqx.tree_at(lambda p: p.mask, problem, mask)
+            mode = noise_mode(masked)
+            self.fits[terms] = masked, mode
+            self.evidence[terms] = laplace_log_evidence(masked, mode)
+        return self.evidence[terms]
+
+    def estimates(self, terms: frozenset) -> dict:
+        """name -> (MAP value, Laplace sd) of the parameters of model ``terms``."""
+        problem, mode = self.fits[terms]
+        values, spread = map_summary(problem, mode)
+        active = {p for term in terms for p in PARAMETERS_OF_TERM[term]}
+        return {name: (values[name], spread[name]) for name in values if name in active}
+
+
+def laplace_log_evidence(problem: NoiseProblem, mode: Mode) -> float:
+    """The Laplace approximation of log p(y | model) at the MAP ``mode`` (module docstring);
+    minus infinity when the MAP did not converge or its Hessian is not positive definite."""
+    sign, log_det = np.linalg.slogdet(mode.hessian)
+    if not mode.converged or sign <= 0:
+        return -math.inf
+    prior = problem.prior
+    z = (mode.theta - prior.location) / prior.scale
+    log_prior = -0.5 * float(np.sum(z * z)) - float(np.sum(np.log(prior.scale)))
+    log_likelihood = float(np.sum(problem.pointwise_log_likelihood(mode.theta)))
+    return log_likelihood + log_prior - 0.5 * float(log_det)
+
+
+def select_noise_terms(
+    spectral: SpectralSummary,
+    level: LevelSummary,
+    prior_of: Callable[[tuple[str, ...]], NoisePrior],
+    *,
+    lsb: float = 0.0,
+    candidates: tuple[str, ...] = CANDIDATE_TERMS,
+    base: tuple[str, ...] = ("white",),
+    threshold: float = DECISIVE_LOG_BAYES_FACTOR,
+) -> TermSelection:
+    """The noise terms a record holds decisive evidence for (module docstring).
+
+    Parameters
+    ----------
+    spectral, level : SpectralSummary, LevelSummary
+        The record's summaries (:func:`~bayescal.models._whittle.spectral_summary`,
+        :func:`~bayescal.models._level.level_summary`).
+    prior_of : callable
+        terms -> the :class:`NoisePrior` of a model with those terms; every model of the
+        search gives each parameter the same prior.
+    lsb : float
+        The resolution the record's samples are rounded to (zero: none), channel unit: its
+        white floor LSB^2 / (12 fs) is known and in every model.
+    candidates : tuple of str
+        The terms tried (:data:`~bayescal.models._terms.CANDIDATE_TERMS`).
+    base : tuple of str
+        The terms every model holds (white noise always among them).
+    threshold : float
+        The log Bayes factor a term must add to be kept.
+
+    Returns
+    -------
+    TermSelection
+        The chosen terms, and for every candidate its Bayes factor and why it was kept or
+        left out.
+    """
+    unknown = [t for t in candidates if t not in CANDIDATE_TERMS]
+    if unknown:
+        raise InputError(f"candidates: {unknown[0]!r} is not a candidate term ({CANDIDATE_TERMS})")
+    families = _Families(spectral, level, prior_of, lsb)
+
+    def gain(model: frozenset, term: str) -> float:
+        """log BF of ``model`` with ``term`` (in place of its output filter, for a filter)
+        against ``model``."""
+        return families.log_evidence(_with(model, term)) - families.log_evidence(model)
+
+    model = frozenset({"white", *base}) - set(candidates)
+    while True:
+        tried = {t: gain(model, t) for t in candidates if t not in model and _fits_in(model, t)}
+        best = max(tried, key=tried.get, default=None)
+        if best is None or not tried[best] >= threshold:
+            break
+        model = _with(model, best)
+    for term in sorted(model & set(candidates)):  # backward: each kept term still decisive?
+        if families.log_evidence(model) - families.log_evidence(model - {term}) < threshold:
+            model = model - {term}
+    return TermSelection(
+        terms=tuple(t for t in ALL_TERMS if t in model),
+        trials=tuple(_trial(families, model, t, threshold) for t in candidates),
+        log_evidence=families.log_evidence(model),
+        estimates=families.estimates(model),
+        threshold=threshold,
+    )
+
+
+def _fits_in(model: frozenset, term: str) -> bool:
+    """Whether ``term`` can be added to ``model`` (one output filter at a time)."""
+    return term not in FILTER_SHAPE_OF_TERM or not model & set(FILTER_SHAPE_OF_TERM)
+
+
+def _with(model: frozenset, term: str) -> frozenset:
+    """``model`` with ``term``; a filter shape replaces the model's."""
+    if term in FILTER_SHAPE_OF_TERM:
+        model = model - set(FILTER_SHAPE_OF_TERM)
+    return model | {term}
+
+
+def _trial(families: _Families, model: frozenset, term: str, threshold: float) -> TermTrial:
+    bar = f"log {math.exp(threshold):.0f}"
+    chosen = families.log_evidence(model)
+    if term in model:
+        factor = chosen - families.log_evidence(model - {term})
+        return TermTrial(
+            term, factor, True, f"kept: log BF {factor:.1f} >= {bar} against the model without it"
+        )
+    factor = families.log_evidence(_with(model, term)) - chosen
+    rival = next((t for t in model if t in FILTER_SHAPE_OF_TERM), None)
+    if rival is not None and term in FILTER_SHAPE_OF_TERM:
+        reason = f"left out: {rival} fits better (log BF {-factor:.1f} against this shape)"
+    elif not math.isfinite(factor):
+        reason = "left out: its fit did not converge"
+    else:
+        reason = f"left out: log BF {factor:.1f} < {bar} for adding it"
+    return TermTrial(term, factor, False, reason)

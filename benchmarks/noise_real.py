@@ -1,0 +1,123 @@
+"""The default ``noise`` on real recordings: N beside the Allan curve's reading, the terms the
+record chose, whether the model fits, and what discovery names.
+
+    python benchmarks/noise_real.py [--samples 262144] [--no-discover]
+
+Recordings (../shared/data, each folder's SOURCE.txt says where from):
+
+- ADIS16405 at 100 Hz (SMAC imudata, imu1, the first 2^18 samples: 44 min), gyro x and
+  accelerometer x, on the part's LSB grid (0.05 deg/s, 3.33 mg);
+- ADIS16405 at about 816 Hz on a rocket's pad (PSAS Launch-12, the quiet window before
+  liftoff), gyro x and accelerometer x;
+- MPU-6050 at 99.3 Hz (sunsided, set-2, 10 min unmoved), gyro x and accelerometer x;
+- a flight computer on the pad (ISSUIUC TARS mk2, 2021-10-30, the quiet window before
+  liftoff, 100 Hz), gyro x and accelerometer x.
+
+The table the README shows is this script's output.
+"""
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+import bayescal as bc
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
+
+
+def smac(samples: int):
+    counts = np.load(SHARED / "smac_imudata_adis16405" / "adis_16405_imu1-6_counts.npz")
+    rate = float(counts["fs_hz"])
+    run = counts["imu1_counts"][:samples]
+    yield (
+        "ADIS16405 100 Hz (SMAC)",
+        "gyro_x",
+        run[:, 0] * float(counts["gyro_lsb_dps"]),
+        rate,
+        "deg/s",
+    )
+    yield "ADIS16405 100 Hz (SMAC)", "acc_x", run[:, 3] * float(counts["acc_lsb_g"]), rate, "g"
+
+
+def pad(label: str, path: Path, names: tuple[str, ...]):
+    recording = bc.load_recording(path)
+    window = bc.find_pad_window(recording)
+    for name in names:
+        channel = recording.channel(name, start=window.start_s, stop=window.stop_s, gaps="split")
+        yield label, name, channel, None, None
+
+
+def mpu6050():
+    folder = SHARED / "sunsided_mpu6050/data/set-2/unmoved-with-x-pointing-forward-10min"
+    gyro = h5py.File(folder / "mpu6050_gyroscope.mat")["gyroBuffer"][()].T
+    accelerometer = h5py.File(folder / "mpu6050_accelerometer.mat")
+    accelerometer = accelerometer[next(iter(accelerometer.keys()))][()].T
+    # Irregular time stamps: evenly spaced at their mean rate.
+    rate = float((gyro.shape[0] - 1) / (gyro[-1, 0] - gyro[0, 0]))
+    yield "MPU-6050 99.3 Hz (sunsided)", "gyro_x", gyro[:, 1], rate, "deg/s"
+    yield "MPU-6050 99.3 Hz (sunsided)", "acc_x", accelerometer[:, 1], rate, "g"
+
+
+def records(samples: int):
+    yield from smac(samples)
+    yield from pad(
+        "ADIS16405 816 Hz pad (PSAS L-12)",
+        SHARED / "psas_adis16405/Launch-12/telemetry_ADIS_decoded.csv",
+        ("gyro_x_dps", "acc_x_mps2"),
+    )
+    yield from mpu6050()
+    yield from pad(
+        "flight computer pad (TARS mk2)",
+        SHARED / "issuiuc_rocket_flights/20211030/flight_computer_trimmed.csv",
+        ("gx", "ax"),
+    )
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--samples", type=int, default=2**18)
+    parser.add_argument("--no-discover", action="store_true")
+    args = parser.parse_args()
+    print(
+        "| recording | channel | N (noise, 90 %) | N (Allan reading) | terms chosen | fit | "
+        "discovery names | time |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
+    for label, name, values, rate, unit in records(args.samples):
+        started = time.perf_counter()
+        try:
+            fit = bc.fit_noise(values, rate, unit=unit, channel=name, seed=0)
+        except bc.BayescalError as error:
+            print(f"| {label} | {name} | refused: {error} | | | | | |")
+            continue
+        n = fit.summary["N"]
+        reading = fit.classical.slope_readings["N"]
+        shown = f"{reading.value:.4g}" if reading.kind == "reading" else f"<= {reading.ci_high:.4g}"
+        terms = ", ".join(term for term in fit.terms if term != "white") or "white only"
+        if fit.lsb > 0:
+            terms += f"; LSB {fit.lsb:.3g}"
+        verdict = "fits" if fit.fits else "MISFIT: " + "; ".join(fit.misfits)
+        if not fit.diagnostics.passed:
+            verdict += " (sampler: " + "; ".join(fit.diagnostics.failures) + ")"
+        named = ""
+        if not args.no_discover:
+            options = {} if rate is None else {"rate_hz": rate, "unit": unit, "channel": name}
+            found = bc.discover(values, posterior=False, **options)
+            named = ", ".join(effect.name for effect in found.effects) or "nothing"
+            if found.unexplained:
+                named += f" (unexplained: {found.unexplained['where']})"
+        elapsed = time.perf_counter() - started
+        print(
+            f"| {label} | {name} | {n['mean']:.4g} [{n['q05']:.4g}, {n['q95']:.4g}] "
+            f"{n['unit']} | {shown} | {terms} | {verdict} | {named} | {elapsed:.0f} s |"
+        )
+        sys.stdout.flush()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,118 @@
+"""All or nothing: the files of a run appear together when it succeeds, with the mode the umask
+allows, and none of them — no temporary, no folder it made — when it fails, is interrupted
+(Ctrl-C, exit 130) or terminated (SIGTERM, exit 143)."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from recording_files import write_csv
+
+from bayescal._errors import InputError
+from bayescal._output import Outputs, write_json
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_files_appear_together_or_not_at_all(tmp_path):
+    folder = tmp_path / "made"
+    with Outputs() as outputs:
+        outputs.folder(folder, "--out")
+        write_json(folder / "a.json", {"a": 1})
+        write_json(tmp_path / "b.json", {"b": 2})
+        assert not (folder / "a.json").exists() and not (tmp_path / "b.json").exists()
+    assert json.loads((folder / "a.json").read_text()) == {"a": 1}
+    assert json.loads((tmp_path / "b.json").read_text()) == {"b": 2}
+
+    other = tmp_path / "other"
+    with pytest.raises(RuntimeError), Outputs() as outputs:
+        outputs.folder(other, "--out")
+        write_json(other / "c.json", {"c": 3})
+        write_json(tmp_path / "b.json", {"b": "new"})
+        raise RuntimeError("the analysis failed")
+    assert not other.exists()
+    assert json.loads((tmp_path / "b.json").read_text()) == {"b": 2}
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["a.json", "b.json", "made"]
+
+
+def test_outputs_honour_the_umask(tmp_path):
+    previous = os.umask(0o027)
+    try:
+        with Outputs():
+            write_json(tmp_path / "shared.json", {})
+    finally:
+        os.umask(previous)
+    assert (tmp_path / "shared.json").stat().st_mode & 0o777 == 0o640
+
+
+def test_an_output_may_not_be_an_input_or_another_output(tmp_path):
+    recording = tmp_path / "rec.csv"
+    recording.write_text("time,gyro_x\n")
+    outputs = Outputs([recording])
+    with pytest.raises(InputError, match="is an input of this run"):
+        outputs.claim(tmp_path / "." / "rec.csv", "--json")
+    outputs.claim(tmp_path / "out.json", "--json")
+    with pytest.raises(InputError, match="--json already writes to this file"):
+        outputs.claim(tmp_path / "out.json", "--export kalibr")
+    with Outputs() as staged, pytest.raises(InputError, match="two outputs of this run"):
+        write_json(tmp_path / "x.json", {})
+        staged.stage(tmp_path / "x.json")
+
+
+def test_a_failure_late_in_a_run_leaves_nothing(run_cli, tmp_path, monkeypatch):
+    """The JSON is written before the exports; an export that fails takes the JSON with it."""
+    rng = np.random.default_rng(0)
+    path = write_csv(
+        tmp_path / "rec.csv",
+        {"time": np.arange(2000) / 100, "gyro_x": 0.1 + 0.01 * rng.standard_normal(2000)},
+    )
+
+    def fail(plans, result):
+        raise InputError("the export failed")
+
+    monkeypatch.setattr("bayescal.report._export.write_exports", fail)
+    out = tmp_path / "out"
+    code, _, stderr = run_cli(
+        "noise", path, "--channel", "gyro_x", "--classical-only", "--json", tmp_path / "n.json",
+        "--out", out, "--export", "kalibr", tmp_path / "imu.yaml",
+    )  # fmt: skip
+    assert code == 2 and "the export failed" in stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.csv"]
+
+
+@pytest.mark.parametrize(
+    ("sent", "code", "word"),
+    [(signal.SIGTERM, 143, "terminated"), (signal.SIGINT, 130, "interrupted")],
+)
+def test_a_signal_ends_the_run_cleanly(tmp_path, sent, code, word):
+    """A signal during the posterior: one line, the shell's code, and nothing written."""
+    rng = np.random.default_rng(1)
+    n = 20_000
+    path = write_csv(
+        tmp_path / "rec.csv",
+        {"time": np.arange(n) / 100, "gyro_x": 0.1 + 0.01 * rng.standard_normal(n)},
+    )
+    out = tmp_path / "posterior"
+    environment = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_PLATFORMS": "cpu"}
+    process = subprocess.Popen(
+        [sys.executable, "-c", "import sys; from bayescal.cli import main; sys.exit(main())",
+         "noise", str(path), "--channel", "gyro_x",
+         "--json", str(tmp_path / "n.json"), "--out", str(out), "--quiet"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=environment,
+    )  # fmt: skip
+    deadline = time.monotonic() + 120
+    while not out.exists() and time.monotonic() < deadline and process.poll() is None:
+        time.sleep(0.05)  # the run made its folder: the input was read, the work begins
+    time.sleep(2.0)
+    assert process.poll() is None, "the run ended before the signal"
+    process.send_signal(sent)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == code, stderr
+    assert stderr.strip() == f"bayescal noise: {word}; no output written"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.csv"]

@@ -16,8 +16,15 @@ row (``numpy.random.SeedSequence([seed, 1, row])``), and the population its own
 (``[seed, 0]``): the same manifest and seed give the same numbers on any cluster.
 
 Failures. A recording that cannot be read or analysed (bad input), whose posterior failed its
-checks, or whose task failed (a worker lost twice) is reported by path with the reason, and
-the rest go on; the population is fitted from those that passed. Nothing is written here.
+sampler checks, whose model does not fit it (a misfit), or whose task failed (a worker lost
+twice) is reported by path with the reason, and the rest go on; the population is fitted from
+those that passed. Nothing is written here.
+
+Terms. Every recording is fitted with the same terms, by default the classical three (white,
+bias instability, rate random walk), never chosen record by record
+(:func:`~bayescal.models._terms.fleet_terms` says why); a recording whose model does not fit
+it (its fit checks, :attr:`~bayescal.NoiseFit.checks`) is left out and reported by path like
+any other failure (``misfit``).
 """
 
 import math
@@ -48,7 +55,7 @@ from ..inference._population import (
     spec_probabilities,
 )
 from ..models._noise_model import parameter_unit
-from ..models._terms import DEFAULT_TERMS, PARAMETER_OF_TERM, TERM_OF_PARAMETER, parse_terms
+from ..models._terms import CLASSICAL_TERMS, PARAMETERS_OF_TERM, TERM_OF_PARAMETER, fleet_terms
 from ..recording._manifest import Manifest, read_manifest
 from ..recording._sensor_cards import SensorCard, find_card
 from ..recording._units import card_value_in, display_values, parse_unit
@@ -87,23 +94,30 @@ class RecordingFailure:
     run: str
     kind: str
     """``input`` (cannot be read or analysed as given), ``health`` (its posterior failed its
-    checks) or ``task`` (its task failed: a worker lost, an internal error)."""
+    sampler checks), ``misfit`` (the fitted model does not fit the record: its Allan deviation,
+    spectrum or lag-1 autocorrelation checks failed, :attr:`~bayescal.NoiseFit.checks`) or
+    ``task`` (its task failed: a worker lost, an internal error)."""
     message: str
 
 
 def _bias_moments(problem, draws: dict):
     """Mean and sd of the bias given the noise at each posterior draw (flat prior): the
     Gaussian the noise fit draws the bias from (:func:`bayescal.models._level.
-    bias_given_noise`), kept whole instead of one draw of it."""
+    bias_given_noise`), kept whole instead of one draw of it. The spectral weights come from
+    the draws' natural values (a low-pass filter shapes the spectrum, not these weights)."""
     import jax.numpy as jnp
 
+    from ..models._components import component_weights
     from ..models._level import bias_given_noise
 
-    inverse = {"R": lambda v: v / problem.prior.ramp_scale, "F": np.arctanh}
-    theta = jnp.asarray(
-        np.stack([inverse.get(p, np.log)(np.ravel(draws[p])) for p in problem.parameters], axis=-1)
-    )
-    mean, variance = bias_given_noise(problem.level, problem.variances(theta), problem.ramp(theta))
+    noise = {
+        name: jnp.asarray(np.ravel(draws[name]))
+        for name in ("N", "B", "K", "Q", "F")
+        if name in draws
+    }
+    variances = component_weights(**noise).at[..., 0].add(problem.rounding)
+    ramp = jnp.asarray(np.ravel(draws["R"])) if "R" in draws else 0.0
+    mean, variance = bias_given_noise(problem.level, variances, ramp)
     return np.asarray(mean), np.sqrt(np.asarray(variance))
 
 
@@ -167,7 +181,7 @@ def fit_recording(task: RecordingTask) -> RecordingDraws | RecordingFailure:
     except BayescalError as error:
         kind = "input" if isinstance(error, InputError) else "health"
         return RecordingFailure(task.row, task.path, task.unit, task.run, kind, str(error))
-    if not fit.passed:
+    if not fit.diagnostics.passed:
         return RecordingFailure(
             task.row,
             task.path,
@@ -175,6 +189,16 @@ def fit_recording(task: RecordingTask) -> RecordingDraws | RecordingFailure:
             task.run,
             "health",
             "posterior checks failed: " + "; ".join(fit.failures),
+        )
+    if not fit.fits:
+        return RecordingFailure(
+            task.row,
+            task.path,
+            task.unit,
+            task.run,
+            "misfit",
+            f"the model ({', '.join(fit.terms)}) does not fit the record: "
+            + "; ".join(fit.misfits),
         )
     return recording_draws(fit, task, time.perf_counter() - started)
 
@@ -653,7 +677,7 @@ def fit_fleet(
     manifest: str | Path | Manifest,
     channel: str,
     *,
-    terms=DEFAULT_TERMS,
+    terms=CLASSICAL_TERMS,
     sensor: str | SensorCard | None = None,
     spec=None,
     seed: int = 0,
@@ -680,8 +704,11 @@ def fit_fleet(
     channel : str
         The column every recording is analysed on (e.g. ``gyro_x``).
     terms : str or tuple of str
-        Noise terms of each recording's fit (:func:`~bayescal.fit_noise`); the population
-        holds N, B and K among them where the recordings resolve them.
+        Noise terms of every recording's fit (:func:`~bayescal.fit_noise`), the same for
+        each (not ``auto``, module docstring); default white, bias instability and rate
+        random walk. The population holds N, B and K among them where the
+        recordings resolve them; quantization or an output filter, when added, stay each
+        recording's own.
     sensor : str or SensorCard, optional
         A sensor card whose datasheet figures become each fit's priors (divided out again by
         the population).
@@ -730,11 +757,11 @@ def fit_fleet(
         raise InputError(
             "a fleet needs at least two recordings", source=manifest.source, fix="add rows"
         )
-    terms = parse_terms(terms) if isinstance(terms, str) else tuple(terms)
+    terms = fleet_terms(terms)
     if isinstance(sensor, str):
         sensor = find_card(sensor)
     requested, card = _requested_limits(spec)
-    fitted_parameters = {PARAMETER_OF_TERM[term] for term in terms}
+    fitted_parameters = {p for term in terms for p in PARAMETERS_OF_TERM[term]}
     for limit in requested:
         if limit.parameter != "bias" and limit.parameter not in fitted_parameters:
             raise InputError(

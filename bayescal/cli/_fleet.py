@@ -11,12 +11,15 @@ import sys
 
 from .._errors import InputError
 from ._arguments import (
+    declare_outputs,
+    finite_float,
     health_exit,
-    output_folder,
+    max_steps,
     positive_float,
     positive_int,
     progress,
     seed,
+    walkers,
 )
 
 DEFAULT_TERMS = "white,bias_instability,rate_random_walk"
@@ -60,17 +63,19 @@ def add_parser(commands) -> None:
         "default) or analyse its segments",
     )
     group.add_argument(
-        "--start", type=float, metavar="S", help="start of each recording's window, seconds"
+        "--start", type=finite_float, metavar="S", help="start of each recording's window, seconds"
     )
     group.add_argument(
-        "--stop", type=float, metavar="S", help="end of each recording's window, seconds"
+        "--stop", type=finite_float, metavar="S", help="end of each recording's window, seconds"
     )
     model = parser.add_argument_group("model")
     model.add_argument(
         "--terms",
         default=DEFAULT_TERMS,
-        help=f"noise terms of each recording's fit (default: {DEFAULT_TERMS}); the population "
-        "holds N, B and K among them where the recordings resolve them",
+        help=f"noise terms of every recording's fit, the same for each (default: "
+        f"{DEFAULT_TERMS}; not auto); the population holds N, B and K among them where the "
+        "recordings resolve them; add quantization or an output filter where the records "
+        "need them",
     )
     model.add_argument(
         "--sensor", metavar="NAME", help="a sensor card's datasheet figures as each fit's priors"
@@ -84,12 +89,10 @@ def add_parser(commands) -> None:
         "repeatable",
     )
     model.add_argument("--seed", type=seed, default=0, help="seed of the fleet (default 0)")
-    model.add_argument(
-        "--walkers", type=positive_int, default=32, help="emcee walkers (default 32)"
-    )
+    model.add_argument("--walkers", type=walkers, default=32, help="emcee walkers (default 32)")
     model.add_argument(
         "--max-steps",
-        type=positive_int,
+        type=max_steps,
         default=40_000,
         help="most emcee steps before a convergence check fails",
     )
@@ -119,23 +122,20 @@ def add_parser(commands) -> None:
 
 
 def run(args) -> int:
-    from .._output import check_writable
-    from ..models._terms import parse_terms
+    from ..models._terms import fleet_terms
     from ..recording._manifest import read_manifest
 
-    terms = parse_terms(args.terms)
-    folder = output_folder(args.out)
-    if args.json:
-        check_writable(args.json, "--json")
+    terms = fleet_terms(args.terms)
     if args.scheduler is not None and args.workers is not None:
         raise InputError(
             "--workers sets the size of the local cluster; with --scheduler the cluster's own "
             "workers run the tasks",
             fix="leave --workers out",
         )
+    (folder,) = declare_outputs([args.manifest], {"--json": args.json}, {"--out": args.out})
     manifest = read_manifest(args.manifest)
     # The analysis's modules load once the input is known to be good.
-    from .._output import write_atomic, write_json, write_netcdf
+    from .._output import file_stem, write_atomic, write_json, write_netcdf
     from ..capabilities._fleet import fit_fleet
     from ..inference._population import population_datatree
     from ..report._fleet import fleet_page, fleet_result, fleet_text
@@ -164,8 +164,7 @@ def run(args) -> int:
     if args.json:
         write_json(args.json, result)
     if folder is not None:
-        folder.mkdir(exist_ok=True)
-        stem = f"fleet_{args.channel}"
+        stem = f"fleet_{file_stem(args.channel)}"
         write_json(folder / f"{stem}.json", result)
         write_netcdf(
             population_datatree(

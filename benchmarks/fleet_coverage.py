@@ -15,7 +15,7 @@ unit-to-unit and run-to-run sd), how often its 90 % interval holds the truth, wi
 error of each unit's estimate (ln N, ln K, mean turn-on bias) shrunk toward the population,
 over that of its own fit (its runs alone), pooled over units and fleets.
 
-    python benchmarks/fleet_coverage.py [--fleets 100] [--workers 2] [--seed 0]
+    python benchmarks/fleet_coverage.py [--fleets 100] [--workers 2] [--seed 0] [--units 8,40]
 
 B is left out: records short enough for a study of thousands of fits do not resolve it; the
 population treats it as it treats N and K.
@@ -148,8 +148,9 @@ def fleet_study(
             fleet = bc.fit_fleet(
                 manifest, "gyro_x", terms=TERMS, seed=seed * 1000 + index, scheduler=client
             )
+            left_out = [f"{Path(f.source).name} ({f.kind}): {f.message}" for f in fleet.failed]
             if not fleet.passed or fleet.failed:
-                failures.append((index, fleet.failures, [f.message for f in fleet.failed]))
+                failures.append((index, fleet.failures, left_out))
             found = intervals(fleet)
             truth = truths(population)
             line = []
@@ -159,13 +160,21 @@ def fleet_study(
                 hit = low <= truth[name] <= high
                 hits.setdefault(name, []).append(hit)
                 line.append(f"{name} {'ok' if hit else 'MISS'}")
-            for name, pairs in unit_errors(fleet, truth_units).items():
+            squared = unit_errors(fleet, truth_units)
+            for name, pairs in squared.items():
                 errors.setdefault(name, []).extend(pairs)
+            # Sums of squared errors (shrunk / own), so that a study cut short can be pooled.
+            line += [
+                f"SSE {name} {np.sum(pairs, axis=0)[0]:.4g}/{np.sum(pairs, axis=0)[1]:.4g}"
+                for name, pairs in squared.items()
+            ]
             log(
                 f"fleet {index:3d}: {count:2d} units, {per_unit.sum():3d} recordings, "
                 f"{time.perf_counter() - started:5.0f} s, passed {fleet.passed}, "
                 f"{len(fleet.failed)} left out; " + ", ".join(line)
             )
+            for reason in (*fleet.failures, *left_out):
+                log(f"    {reason}")
     return hits, errors, failures
 
 
@@ -209,7 +218,13 @@ def main() -> None:
     parser.add_argument("--fleets", type=int, default=100)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--units",
+        default=f"{UNITS[0]},{UNITS[1]}",
+        help="fewest and most units of a fleet (default 8,40: the issue's range)",
+    )
     args = parser.parse_args()
+    units = tuple(int(n) for n in args.units.split(","))
     from distributed import Client, LocalCluster
 
     with (
@@ -219,7 +234,7 @@ def main() -> None:
         Client(cluster) as client,
     ):
         started = time.perf_counter()
-        hits, errors, failures = fleet_study(args.fleets, args.seed, client)
+        hits, errors, failures = fleet_study(args.fleets, args.seed, client, units=units)
     report(hits, errors, failures)
     print(f"\n{args.fleets} fleets in {(time.perf_counter() - started) / 60:.0f} min")
 

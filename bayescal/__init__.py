@@ -24,6 +24,8 @@ _EXPORTS = {
     "sensor_cards": "recording._sensor_cards",
     "find_card": "recording._sensor_cards",
     "SensorCard": "recording._sensor_cards",
+    "read_manifest": "recording._manifest",
+    "Manifest": "recording._manifest",
     # classical estimators
     "allan_deviation": "classical._allan",
     "modified_allan_deviation": "classical._allan",
@@ -42,6 +44,7 @@ _EXPORTS = {
     "Poses": "classical._multi_position",
     # models
     "NoiseModel": "models._noise_model",
+    "FleetPopulation": "models._population",
     # capabilities
     "fit_noise": "capabilities._noise",
     "NoiseFit": "capabilities._noise",
@@ -56,6 +59,8 @@ _EXPORTS = {
     "Discovery": "capabilities._discovery",
     "FoundEffect": "capabilities._discovery",
     "CheckResult": "capabilities._discovery",
+    "fit_fleet": "capabilities._fleet",
+    "FleetFit": "capabilities._fleet",
 }
 
 __all__ = sorted(_EXPORTS)  # noqa: PLE0605 (the one table above lists the public names)

@@ -134,6 +134,29 @@ def check_terms(terms: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(t for t in ALL_TERMS if t in terms)
 
 
+def fleet_terms(terms) -> tuple[str, ...]:
+    """The terms every recording of a fleet is fitted with: named ones, never ``auto``.
+
+    A population of ln B across units needs B in every unit's model. Terms chosen by evidence
+    record by record would put B in some models and hold it at zero in others (a record too
+    short to resolve it is not a unit without it), so a fleet fits one set of terms
+    everywhere: by default the classical three (white, bias instability, rate random walk),
+    whose scales a record does not resolve keep a prior-wide posterior that the population
+    divides out again (and a scale no recording resolves is left out of the population).
+    Terms of the sensor's high frequencies (quantization, an output filter) may be added;
+    they stay each recording's own.
+    """
+    terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
+    if terms == AUTO:
+        raise InputError(
+            "terms: a fleet fits the same terms in every recording, and 'auto' would choose "
+            "them recording by recording",
+            fix="name the terms (default white,bias_instability,rate_random_walk), adding "
+            "the high-frequency ones 'bayescal noise' chose (e.g. quantization, output_filter)",
+        )
+    return terms
+
+
 def term_parameters(terms: tuple[str, ...]) -> tuple[str, ...]:
     """The parameters of ``terms``, in order."""
     return tuple(p for term in terms for p in PARAMETERS_OF_TERM[term])

@@ -1,7 +1,7 @@
 """The default ``noise`` on real recordings: N beside the Allan curve's reading, the terms the
 record chose, whether the model fits, and what discovery names.
 
-    python benchmarks/noise_real.py [--samples 262144] [--no-discover]
+    python benchmarks/noise_real.py [--samples 262144] [--no-discover] [--skip ROWS]
 
 Recordings (../shared/data, each folder's SOURCE.txt says where from):
 
@@ -81,13 +81,18 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=2**18)
     parser.add_argument("--no-discover", action="store_true")
+    parser.add_argument(
+        "--skip", type=int, default=0, help="leave out the first rows (resume a cut-short run)"
+    )
     args = parser.parse_args()
     print(
         "| recording | channel | N (noise, 90 %) | N (Allan reading) | terms chosen | fit | "
         "discovery names | time |"
     )
     print("|---|---|---|---|---|---|---|---|")
-    for label, name, values, rate, unit in records(args.samples):
+    for index, (label, name, values, rate, unit) in enumerate(records(args.samples)):
+        if index < args.skip:
+            continue
         started = time.perf_counter()
         try:
             fit = bc.fit_noise(values, rate, unit=unit, channel=name, seed=0)

@@ -66,23 +66,32 @@ class _Terminated(BaseException):
     no ``except Exception`` of the library swallows it)."""
 
 
-def _raise_terminated(signum, frame):
-    raise _Terminated
+_RAISED = {signal.SIGINT: KeyboardInterrupt, signal.SIGTERM: _Terminated}
 
 
 @contextlib.contextmanager
-def _sigterm_unwinds():
-    """While the block runs, SIGTERM raises :class:`_Terminated` (in the main thread only;
-    the handler in place before is restored after)."""
+def _signals_unwind():
+    """While the block runs, SIGINT raises KeyboardInterrupt and SIGTERM :class:`_Terminated`
+    (in the main thread only; the handlers in place before are restored after). Yields the
+    signals received: one that arrives inside a callback Python runs without letting it
+    raise (a garbage-collector hook of JAX's, a ``__del__``) is lost as an exception, so the
+    block checks the list before it lets its outputs be written."""
+    received: list[int] = []
+
+    def handler(signum, frame):
+        received.append(signum)
+        raise _RAISED[signum]
+
     try:
-        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+        previous = {signum: signal.signal(signum, handler) for signum in _RAISED}
     except ValueError:  # not the main thread: leave signals to whoever owns them
-        yield
+        yield received
         return
     try:
-        yield
+        yield received
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for signum, handler_before in previous.items():
+            signal.signal(signum, handler_before)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -92,8 +101,11 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     _enable_compilation_cache()
     try:
-        with _sigterm_unwinds(), Outputs():
-            return args.run(args)
+        with _signals_unwind() as received, Outputs():
+            code = args.run(args)
+            if received:  # a signal swallowed where it arrived: the run does not stand
+                raise _RAISED[received[0]]
+            return code
     except BayescalError as error:
         print(f"bayescal {_command(args)}: error: {error}", file=sys.stderr)
         return error.exit_code

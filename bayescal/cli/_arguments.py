@@ -515,3 +515,23 @@ def health_exit(command: str, failures: list[str]) -> int:
 def progress(args) -> bool:
     """A progress bar only on a terminal, and not with --quiet."""
     return not getattr(args, "quiet", False) and sys.stderr.isatty()
+
+
+def parse_sections(text: str, form: str = "START:STOP,START:STOP,...") -> list[tuple[float, float]]:
+    """``--sections T0:T1,T0:T1,...`` in seconds from the first sample, each ending after it
+    starts; ``form`` is how the command writes them, for the message."""
+    sections = []
+    for part in text.split(","):
+        try:
+            start, stop = (float(x) for x in part.split(":"))
+        except ValueError:
+            start = stop = math.nan
+        if not (math.isfinite(start) and math.isfinite(stop)):
+            raise InputError(
+                f"--sections {text!r}: cannot read {part.strip()!r}",
+                fix=f"write {form} in seconds from the first sample",
+            )
+        if not stop > start:
+            raise InputError(f"--sections: {part.strip()} ends before it starts")
+        sections.append((start, stop))
+    return sections

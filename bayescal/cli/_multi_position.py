@@ -1,8 +1,6 @@
 """``bayescal multi-position``: scale, offset and misalignment of a three-axis accelerometer
 from many still poses."""
 
-import math
-
 from .._errors import InputError
 from ..recording._sections import MIN_DURATION_S as MIN_STILL_S
 from ._arguments import (
@@ -15,6 +13,7 @@ from ._arguments import (
     height,
     latitude,
     load,
+    parse_sections,
     positive_float,
     progress,
     seed,
@@ -59,25 +58,6 @@ def add_parser(commands) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
     parser.set_defaults(run=run)
-
-
-def parse_sections(text: str) -> list[tuple[float, float]]:
-    """``--sections T0:T1,T0:T1,...`` in seconds from the first sample."""
-    sections = []
-    for part in text.split(","):
-        try:
-            start, stop = (float(x) for x in part.split(":"))
-        except ValueError:
-            start = stop = math.nan
-        if not (math.isfinite(start) and math.isfinite(stop)):
-            raise InputError(
-                f"--sections {text!r}: cannot read {part.strip()!r}",
-                fix="write START:STOP,START:STOP,... in seconds from the first sample",
-            )
-        if not stop > start:
-            raise InputError(f"--sections: {part.strip()} ends before it starts")
-        sections.append((start, stop))
-    return sections
 
 
 def _read(args):

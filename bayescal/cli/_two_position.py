@@ -1,8 +1,6 @@
 """``bayescal two-position``: scale and offset of one accelerometer axis from an up and a down
 section."""
 
-import math
-
 import numpy as np
 
 from .._errors import InputError
@@ -16,6 +14,7 @@ from ._arguments import (
     height,
     latitude,
     load,
+    parse_sections,
     progress,
     require_acceleration,
     seed,
@@ -106,22 +105,10 @@ def check_sections(text: str | None) -> None:
     """``--sections U0:U1,D0:D1``: two windows in seconds, each ending after it starts."""
     if text is None:
         return
-    parts = text.split(",")
-    for part in parts:
-        try:
-            start, stop = (float(x) for x in part.split(":"))
-        except ValueError:
-            start = stop = math.nan
-        if not (math.isfinite(start) and math.isfinite(stop)):
-            raise InputError(
-                f"--sections {text!r}: cannot read {part.strip()!r}",
-                fix="write U0:U1,D0:D1 in seconds from the first sample",
-            )
-        if not stop > start:
-            raise InputError(f"--sections: {part.strip()} ends before it starts")
-    if len(parts) != 2:
+    sections = parse_sections(text, form="U0:U1,D0:D1")
+    if len(sections) != 2:
         raise InputError(
-            f"--sections {text!r} gives {len(parts)} section(s)",
+            f"--sections {text!r} gives {len(sections)} section(s)",
             fix="give two: the up and the down section, U0:U1,D0:D1",
         )
 

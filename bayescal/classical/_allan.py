@@ -26,7 +26,19 @@ import numba
 import numpy as np
 
 from .._errors import InputError
-from ._edf import deviation_interval, equivalent_degrees_of_freedom, identify_noise_exponent
+from ..recording._series import (
+    SpoolWriter,
+    blocks,
+    gap_free_runs,
+    is_spooled,
+    read,
+)
+from ._edf import (
+    _LAG1_MAX_POINTS,
+    deviation_interval,
+    equivalent_degrees_of_freedom,
+    identify_noise_exponent,
+)
 
 TauSpec = Literal["octave", "decade", "all"] | int | np.ndarray | list
 
@@ -251,19 +263,186 @@ def _longest_complete_run(phase_lane: np.ndarray, missing_lane: np.ndarray) -> n
     return phase_lane[starts[best] : stops[best] + 1]
 
 
-def _deviation(estimator: _Estimator, y, rate, taus, axis, kind, confidence, noise_type, ci_method):
-    if not rate > 0:
-        raise InputError(f"rate={rate!r} must be a positive sample rate in Hz")
-    if not 0 < confidence < 1:
-        raise InputError(f"confidence={confidence!r} must lie between 0 and 1")
-    values = np.moveaxis(np.asarray(y, dtype=float), axis, -1)
-    lead_shape = values.shape[:-1]
-    lanes = values.reshape(-1, values.shape[-1])
+@numba.njit(parallel=True, cache=True)
+def _window_sums(span, missing, lags, steps, order, first, counts_):  # pragma: no cover
+    """As :func:`_difference_sums` for the terms k = first .. first + count - 1 of one lane
+    (``counts_``: the count for each lag): term k reads span[k - first + j * lag]
+    (j = 0 .. order), every step-th k of the record; ``missing`` (empty: none) is laid out as
+    ``span``."""
+    sums = np.zeros(lags.size)
+    counts = np.zeros(lags.size, dtype=np.int64)
+    gapped = missing.size > 0
+    for index in numba.prange(lags.size):
+        lag = lags[index]
+        step = steps[index]
+        total = 0.0
+        terms = 0
+        for k in range((-first) % step, counts_[index], step):
+            if gapped and missing[k + order * lag] != missing[k]:
+                continue
+            if order == 2:
+                value = span[k + 2 * lag] - 2.0 * span[k + lag] + span[k]
+            else:
+                value = span[k + 3 * lag] - 3.0 * span[k + 2 * lag] + 3.0 * span[k + lag] - span[k]
+            total += value * value
+            terms += 1
+        sums[index] = total
+        counts[index] = terms
+    return sums, counts
+
+
+_SPAN_BLOCK = 1 << 22
+"""Terms per pass of the blocked sums over a spooled phase (32 MB a window)."""
+
+
+@numba.njit(cache=True)
+def _sum_present(block, total, present):  # pragma: no cover - compiled
+    """``total`` and ``present`` carried on over the samples of ``block`` that are not NaN,
+    in order (the sum :func:`_integrate` takes the mean from, to the last bit)."""
+    for value in block:
+        if not np.isnan(value):
+            total += value
+            present += 1
+    return total, present
+
+
+@numba.njit(cache=True)
+def _integrate_block(block, mean, period, running, gaps):  # pragma: no cover - compiled
+    """:func:`_integrate` carried on over one block: its phase points and running counts of
+    missing samples, and the running phase and count at its end."""
+    phase = np.empty(block.size)
+    missing = np.empty(block.size)
+    for k in range(block.size):
+        if np.isnan(block[k]):
+            gaps += 1
+        else:
+            running += (block[k] - mean) * period
+        phase[k] = running
+        missing[k] = gaps
+    return phase, missing, running, gaps
+
+
+def _spooled_phase(y, rate: float):
+    """The phase of a spooled rate series and the running count of missing samples, both
+    spooled (the latter None when nothing is missing): :func:`_integrate`'s arithmetic, in
+    its order, so the phase is the in-memory one to the last bit."""
+    total, present = 0.0, 0
+    for _, block in blocks(y):
+        total, present = _sum_present(block, total, present)
+    mean = total / max(present, 1)
+    phase = SpoolWriter(name="phase")
+    missing = SpoolWriter(phase.folder, name="missing") if present < y.size else None
+    phase.append([0.0])
+    if missing is not None:
+        missing.append([0.0])
+    running, gaps = 0.0, 0
+    for _, block in blocks(y):
+        points, counts, running, gaps = _integrate_block(block, mean, 1.0 / rate, running, gaps)
+        phase.append(points)
+        if missing is not None:
+            missing.append(counts)
+    return phase.finish(), (None if missing is None else missing.finish())
+
+
+def _spooled_difference_sums(phase, missing, factors, order, overlapping):
+    """:func:`_difference_sums` of one spooled phase, block by block: the factors whose span
+    fits beside a block share one read of it; a longer one reads its order + 1 windows and
+    lays them side by side (the record between them is not needed)."""
+    length = phase.size
+    sums = np.zeros(factors.size)
+    counts = np.zeros(factors.size, dtype=np.int64)
+    steps = np.ones_like(factors) if overlapping else factors.astype(np.int64)
+    reach = order * factors.astype(np.int64)  # phase points a term spans, less one
+    short = np.flatnonzero(reach <= _SPAN_BLOCK)
+    groups = [short] if short.size else []
+    groups += [np.array([i]) for i in np.flatnonzero(reach > _SPAN_BLOCK)]
+    for members in groups:
+        alone = reach[members[0]] > _SPAN_BLOCK
+        for first in range(0, length - int(reach[members].min()), _SPAN_BLOCK):
+            terms = np.clip(length - reach[members] - first, 0, _SPAN_BLOCK)
+            if alone:
+                offsets = np.arange(order + 1) * int(factors[members[0]])
+                span = _side_by_side(phase, first, int(terms[0]), offsets)
+                gaps = _side_by_side(missing, first, int(terms[0]), offsets) if missing else None
+                lags = terms.astype(np.int64)
+            else:
+                stop = min(length, first + _SPAN_BLOCK + int(reach[members].max()))
+                span = read(phase, first, stop)
+                gaps = read(missing, first, stop) if missing else None
+                lags = factors[members].astype(np.int64)
+            part, made = _window_sums(
+                span,
+                np.zeros(0) if gaps is None else gaps,
+                lags,
+                steps[members],
+                order,
+                first,
+                terms,
+            )
+            sums[members] += part
+            counts[members] += made
+    return sums[None, :], counts[None, :]
+
+
+def _side_by_side(series, first: int, count: int, offsets) -> np.ndarray:
+    """The windows series[first + o : first + o + count] for each offset o, one after the
+    other: on it, a lag of ``count`` samples is the lag between the windows."""
+    return np.concatenate([read(series, first + o, first + o + count) for o in offsets])
+
+
+def _lane_exponents(phase_of, size, factors, max_differences):
+    """The noise exponent at each factor from the phase of the longest complete run, read
+    decimated (``phase_of(step)``: its every step-th sample, at most what the lag-1 method
+    reads)."""
+    exponents = []
+    for m in factors.tolist():
+        if size > 2 * m:
+            decimated = phase_of(m)
+            exponents.append(identify_noise_exponent(decimated, 1, max_differences=max_differences))
+        else:
+            exponents.append(0)
+    return exponents
+
+
+def _spooled_lanes(estimator, y, rate, taus, noise_type, max_differences):
+    """(factors, sums, counts, exponents) of one spooled rate series."""
+    if estimator.modified:
+        raise InputError(
+            "y: the modified Allan deviation of a spooled (long) record is not computed",
+            fix="use allan_deviation or hadamard_deviation, or a record that fits in memory",
+        )
+    phase, missing = _spooled_phase(y, float(rate))
+    n_phase = phase.size
+    longest = (n_phase - 1) // estimator.order
+    if longest < 1:
+        raise InputError(f"y: {y.size} samples are too few for a {estimator.name}")
+    factors = averaging_factors(taus, n_phase, float(rate), longest=longest)
+    sums, counts = _spooled_difference_sums(
+        phase, missing, factors, estimator.order, estimator.overlapping
+    )
+    exponents = None
+    if noise_type == "auto":
+        runs = gap_free_runs(y)
+        start, stop = runs[np.argmax(runs[:, 1] - runs[:, 0])]
+        size = stop - start + 1  # phase points of the run
+        exponents = [
+            _lane_exponents(
+                lambda m: read(phase, start, start + min(size, m * _LAG1_MAX_POINTS), m),
+                size,
+                factors,
+                max_differences,
+            )
+        ]
+    return factors, sums, counts, exponents
+
+
+def _memory_lanes(estimator, lanes, rate, taus, kind, noise_type, max_differences):
+    """(factors, sums, counts, exponents) of the lanes of an in-memory array."""
     phase, missing = _phase_lanes(lanes, float(rate), kind)
     n_phase = phase.shape[1]
     longest = n_phase // 3 if estimator.modified else (n_phase - 1) // estimator.order
     if longest < 1:
-        raise InputError(f"y: {values.shape[-1]} samples are too few for a {estimator.name}")
+        raise InputError(f"y: {lanes.shape[-1]} samples are too few for a {estimator.name}")
     factors = averaging_factors(taus, n_phase, float(rate), longest=longest)
     if estimator.modified:
         sums, counts = _modified_sums(phase, missing, factors)
@@ -272,12 +451,51 @@ def _deviation(estimator: _Estimator, y, rate, taus, axis, kind, confidence, noi
         sums, counts = _difference_sums(
             phase, missing, factors, estimator.order, estimator.overlapping
         )
+    exponents = None
+    if noise_type == "auto":
+        exponents = []
+        for lane in range(lanes.shape[0]):
+            complete = _longest_complete_run(phase[lane], missing[lane])
+            exponents.append(
+                _lane_exponents(
+                    lambda m, complete=complete: complete[::m][:_LAG1_MAX_POINTS],
+                    complete.size,
+                    factors,
+                    max_differences,
+                )
+            )
+    return factors, sums, counts, exponents
+
+
+def _deviation(estimator: _Estimator, y, rate, taus, axis, kind, confidence, noise_type, ci_method):
+    if not rate > 0:
+        raise InputError(f"rate={rate!r} must be a positive sample rate in Hz")
+    if not 0 < confidence < 1:
+        raise InputError(f"confidence={confidence!r} must lie between 0 and 1")
+    max_differences = 3 if estimator.order == 3 else 2
+    if is_spooled(y):
+        if kind != "rate":
+            raise InputError(f"kind={kind!r}: a spooled series is read as rate samples")
+        lead_shape = ()
+        factors, sums, counts, exponents = _spooled_lanes(
+            estimator, y, rate, taus, noise_type, max_differences
+        )
+    else:
+        values = np.moveaxis(np.asarray(y, dtype=float), axis, -1)
+        lead_shape = values.shape[:-1]
+        lanes = values.reshape(-1, values.shape[-1])
+        factors, sums, counts, exponents = _memory_lanes(
+            estimator, lanes, rate, taus, kind, noise_type, max_differences
+        )
     tau = factors / float(rate)
     with np.errstate(invalid="ignore", divide="ignore"):
         deviation = np.sqrt(sums / (estimator.normalisation * tau**2 * counts))
 
-    max_differences = 3 if estimator.order == 3 else 2
-    alpha = np.empty(counts.shape, dtype=np.int64)
+    alpha = (
+        np.full(counts.shape, int(noise_type), dtype=np.int64)
+        if exponents is None
+        else np.array(exponents, dtype=np.int64)
+    )
     edf = np.full(counts.shape, np.nan)
     edf_of = functools.cache(
         lambda noise, m, terms: equivalent_degrees_of_freedom(
@@ -290,21 +508,10 @@ def _deviation(estimator: _Estimator, y, rate, taus, axis, kind, confidence, noi
             phase_averaged=ci_method == "stable32",
         )
     )
-    for lane in range(lanes.shape[0]):
-        complete = (
-            _longest_complete_run(phase[lane], missing[lane]) if noise_type == "auto" else None
+    for lane, index in np.argwhere(counts > 0):
+        edf[lane, index] = edf_of(
+            int(alpha[lane, index]), int(factors[index]), int(counts[lane, index])
         )
-        for index, m in enumerate(factors.tolist()):
-            if noise_type != "auto":
-                alpha[lane, index] = int(noise_type)
-            elif complete.size > 2 * m:
-                alpha[lane, index] = identify_noise_exponent(
-                    complete, m, max_differences=max_differences
-                )
-            else:
-                alpha[lane, index] = 0
-            if counts[lane, index] > 0:
-                edf[lane, index] = edf_of(int(alpha[lane, index]), m, int(counts[lane, index]))
     ci_low, ci_high = deviation_interval(deviation, edf, confidence, ci_method)
     shape = (*lead_shape, factors.size)
     return DeviationResult(

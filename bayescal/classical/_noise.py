@@ -30,6 +30,7 @@ import equinox as eqx
 import numpy as np
 from scipy import stats
 
+from ..recording._series import finite_moments, is_spooled, series_size
 from ..recording._units import BIAS_INSTABILITY_FACTOR
 from ._allan import DeviationResult, allan_deviation
 
@@ -97,12 +98,15 @@ class ClassicalNoise(eqx.Module):
     slope_readings: dict
 
 
-def student_t_interval(values: np.ndarray, confidence: float) -> tuple[float, float, float]:
-    """Mean and its two-sided Student-t interval, ignoring NaN (../shared/DESIGN.md)."""
-    present = values[~np.isnan(values)]
-    n = present.size
-    mean = float(present.mean())
-    half = float(stats.t.ppf(0.5 + confidence / 2, n - 1) * present.std(ddof=1) / math.sqrt(n))
+def student_t_interval(values, confidence: float) -> tuple[float, float, float]:
+    """Mean and its two-sided Student-t interval, ignoring NaN (../shared/DESIGN.md);
+    ``values`` an array or a spooled series."""
+    n, mean, squares = finite_moments(values)
+    return _t_interval(n, mean, math.sqrt(squares / (n - 1)), confidence)
+
+
+def _t_interval(n: int, mean: float, std: float, confidence: float) -> tuple[float, float, float]:
+    half = float(stats.t.ppf(0.5 + confidence / 2, n - 1) * std / math.sqrt(n))
     return mean, mean - half, mean + half
 
 
@@ -217,15 +221,15 @@ def t_interval_check(allan: DeviationResult, std: float, n_samples: int) -> TInt
 
 def classical_noise(y, rate: float, *, confidence: float = 0.95, taus="octave") -> ClassicalNoise:
     """Classical noise summary of one static channel ``y`` (NaN marks missing samples)."""
-    values = np.asarray(y, dtype=float)
-    n = int(np.count_nonzero(~np.isnan(values)))
-    bias, low, high = student_t_interval(values, confidence)
-    std = float(np.nanstd(values, ddof=1))
+    values = y if is_spooled(y) else np.asarray(y, dtype=float)
+    n, mean, squares = finite_moments(values)
+    std = math.sqrt(squares / (n - 1)) if n > 1 else math.nan
+    bias, low, high = _t_interval(n, mean, std, confidence)
     allan = allan_deviation(values, rate, taus, confidence=confidence)
     return ClassicalNoise(
         n_samples=n,
         rate_hz=float(rate),
-        duration_s=values.size / rate,
+        duration_s=series_size(values) / rate,
         bias=bias,
         bias_ci_low=low,
         bias_ci_high=high,

@@ -475,13 +475,11 @@ def require_acceleration(channel, command: str) -> None:
 def require_bayesian_run(channel, alternative: str | None = None) -> None:
     """The Bayesian noise model reads the spectrum of gap-free runs longer than
     ``MIN_INCREMENTS`` samples: refuse a channel without one, before the model is built."""
-    import numpy as np
-
     from ..models._whittle import MIN_INCREMENTS
+    from ..recording._series import gap_free_runs
 
-    present = np.concatenate(([0], np.isfinite(channel.values).astype(np.int8), [0]))
-    edges = np.flatnonzero(np.diff(present))
-    longest = int(np.max(edges[1::2] - edges[::2], initial=0))
+    runs = gap_free_runs(channel.values)
+    longest = int(max(runs[:, 1] - runs[:, 0], default=0))
     if longest <= MIN_INCREMENTS:
         raise InputError(
             f"the Bayesian model needs a run of at least {MIN_INCREMENTS + 1} samples without "

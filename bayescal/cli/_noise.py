@@ -1,11 +1,14 @@
 """``bayescal noise``: the noise of one static channel, classical and Bayesian."""
 
+import argparse
+
 from .._errors import InputError
 from ._arguments import (
     add_recording_arguments,
     channel_of,
     confidence,
     declare_outputs,
+    grid_options,
     health_exit,
     load,
     max_steps,
@@ -34,6 +37,14 @@ def add_parser(commands) -> None:
         "--example",
         action="store_true",
         help="analyse a built-in simulated gyro recording instead of a file",
+    )
+    parser.add_argument(
+        "--stream",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="read a Parquet file or text table block by block, the channel spooled to disk "
+        "(memory bounded by a block; the default for files over 256 MB), or --no-stream to "
+        "read it into memory",
     )
     parser.add_argument(
         "--seed",
@@ -118,6 +129,61 @@ def _recording(args):
     return load(args), args.channel
 
 
+def _streamed(args) -> bool:
+    """Whether the recording is read block by block (``--stream``, or a long file)."""
+    if args.example or not args.file:
+        return False
+    from ..recording._stream import STREAMED_SUFFIXES, is_long_recording
+
+    if args.stream is None:
+        return is_long_recording(args.file) and not args.pad
+    if args.stream and not args.file.lower().endswith(STREAMED_SUFFIXES):
+        raise InputError(
+            "--stream reads Parquet files and text tables",
+            source=args.file,
+            fix="leave --stream out, or convert the recording to Parquet",
+        )
+    if args.stream and args.pad:
+        raise InputError(
+            "--pad finds the pad window in the whole recording in memory; --stream reads it in "
+            "blocks",
+            source=args.file,
+            fix="give the window with --start/--stop, or leave --stream out",
+        )
+    return bool(args.stream)
+
+
+def _streamed_channel(args):
+    """The channel of a long recording, spooled to disk, and its window's description."""
+    from ..recording._stream import stream_channel
+
+    if not args.channel:
+        raise InputError(
+            "--channel is required",
+            source=args.file,
+            fix="name the column to analyse, e.g. --channel gyro_x",
+        )
+    for given, argument in ((args.topic, "--topic"), (args.names, "--names")):
+        if given:
+            raise InputError(
+                f"{argument} does not apply to a streamed Parquet file or text table",
+                source=args.file,
+                fix=f"leave {argument} out, or read the recording in memory with --no-stream",
+            )
+    chosen = "start/stop" if args.start is not None or args.stop is not None else "whole record"
+    channel = stream_channel(
+        args.file,
+        args.channel,
+        start=args.start,
+        stop=args.stop,
+        skip_rows=args.skip_rows,
+        progress=progress(args),
+        **grid_options(args, args.channel),
+    )
+    window = {"start_s": channel.start_s, "stop_s": channel.stop_s, "selected_by": chosen}
+    return channel, window
+
+
 def run(args) -> int:
     from .._output import file_stem, write_json, write_netcdf
     from ..models._terms import parse_terms
@@ -125,17 +191,20 @@ def run(args) -> int:
     terms = parse_terms(args.terms)
     exports = {f"--export {fmt}": path for fmt, path in args.export or ()}
     (folder,) = declare_outputs([args.file], {"--json": args.json, **exports}, {"--out": args.out})
-    recording, name = _recording(args)
-    channel, window = channel_of(args, recording, name)
+    topic = None
+    if _streamed(args):
+        channel, window = _streamed_channel(args)
+        name = channel.channel
+    else:
+        recording, name = _recording(args)
+        channel, window = channel_of(args, recording, name)
+        topic = recording.topic
     # The analysis's modules load once the input is known to be good.
-    from ..capabilities._noise import fit_noise
     from ..classical._noise import classical_noise
     from ..report._export import plan_exports, write_exports
     from ..report._noise import noise_result, noise_text
 
-    exports = plan_exports(
-        args.export, channel.unit, name, channel.source, recording.topic, args.export_axes
-    )
+    exports = plan_exports(args.export, channel.unit, name, channel.source, topic, args.export_axes)
     fit = None
     if args.classical_only:
         try:
@@ -148,6 +217,8 @@ def run(args) -> int:
             ) from None
     else:
         require_bayesian_run(channel, "pass --classical-only")
+        from ..capabilities._noise import fit_noise
+
         fit = fit_noise(
             channel,
             terms=terms,

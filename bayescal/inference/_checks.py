@@ -27,6 +27,7 @@ from ..models._composite import (
 from ..models.effects.gauss_markov import GaussMarkov
 from ..models.effects.outliers import robust_scores
 from ..recording._levels import discrete_step, rail_check
+from ..recording._series import blocks, finite_moments
 
 CHECK_LEVEL = 0.01
 """A check fails when its (Bonferroni-corrected) p-value is below this."""
@@ -69,7 +70,7 @@ def allan_check(residual, rate_hz: float, unit: str, model_variance, exponents) 
     usable = np.isfinite(allan.deviation)
     tau, deviation = allan.tau[usable], allan.deviation[usable]
     predicted = model_variance(tau)
-    n_phase = int(np.count_nonzero(np.isfinite(residual))) + 1
+    n_phase = finite_moments(residual)[0] + 1
     edf = np.array(
         [
             equivalent_degrees_of_freedom(
@@ -360,17 +361,41 @@ LAG_ONE_TOLERANCE = 0.05
 """Likewise for the lag-1 autocorrelation of the increments (white noise: -0.5)."""
 
 
+def _increment_sums(values) -> dict:
+    """Sums of the increments d_k = y_{k+1} - y_k between present samples (an array or a
+    spooled series, read block by block): their count, sum and sum of squares, and over the
+    pairs of neighbouring increments the count, the sum of both members and of products."""
+    sums = dict.fromkeys(("count", "sum", "squares", "pairs", "pair_sum", "pair_products"), 0.0)
+    carry = np.empty(0)
+    for _, block in blocks(values):
+        joined = np.concatenate((carry, block))
+        increments = np.diff(joined)
+        present = np.isfinite(increments)
+        new = present.copy()
+        new[: max(carry.size - 1, 0)] = False  # counted with the block before
+        sums["count"] += np.count_nonzero(new)
+        sums["sum"] += float(np.sum(increments[new]))
+        sums["squares"] += float(np.sum(increments[new] ** 2))
+        pairs = present[1:] & present[:-1]
+        sums["pairs"] += np.count_nonzero(pairs)
+        sums["pair_sum"] += float(np.sum(increments[1:][pairs] + increments[:-1][pairs]))
+        sums["pair_products"] += float(np.sum(increments[1:][pairs] * increments[:-1][pairs]))
+        carry = joined[-2:]
+    sums["pairs"] = int(sums["pairs"])
+    return sums
+
+
 def lag_one_check(values, autocovariance: np.ndarray) -> dict:
     """The lag-1 autocorrelation of the increments of ``values`` (runs between gaps) against
     the model's, ``autocovariance`` its increments' autocovariance at lags 0, 1, 2 ...;
-    standard error by Bartlett's formula from the model's autocorrelations."""
-    values = np.asarray(values, dtype=float)
-    present = np.isfinite(values)
-    increments = np.diff(values)
-    both = present[1:] & present[:-1]
-    centred = np.where(both, increments - np.mean(increments[both]), 0.0)
-    pairs = both[1:] & both[:-1]
-    observed = float(np.sum(centred[1:] * centred[:-1] * pairs) / np.sum(centred[both] ** 2))
+    standard error by Bartlett's formula from the model's autocorrelations. ``values``: an
+    array or a spooled series."""
+    sums = _increment_sums(values)
+    mean = sums["sum"] / sums["count"]
+    observed = float(
+        (sums["pair_products"] - mean * sums["pair_sum"] + mean**2 * sums["pairs"])
+        / (sums["squares"] - sums["sum"] * mean)
+    )
     rho = np.asarray(autocovariance, dtype=float) / autocovariance[0]
     predicted = float(rho[1])
     lags = np.arange(1, rho.size - 1)
@@ -379,7 +404,7 @@ def lag_one_check(values, autocovariance: np.ndarray) -> dict:
         np.sum((extended[lags + 1] + extended[lags - 1] - 2 * predicted * extended[lags]) ** 2)
         + (rho[1] * 2 - 2 * predicted * rho[0]) ** 2 / 2
     )
-    standard_error = math.sqrt(max(variance, 1e-12) / max(int(np.sum(pairs)), 1))
+    standard_error = math.sqrt(max(variance, 1e-12) / max(sums["pairs"], 1))
     z = (observed - predicted) / standard_error
     return {
         "name": "lag_one_autocorrelation",

@@ -23,6 +23,7 @@ import numpy as np
 from jax.scipy.linalg import cho_solve
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from ..recording._series import blocks, gap_free_runs, is_spooled, series_size
 from ._components import block_covariance_basis
 
 GEOMETRIC_BLOCKS = 96
@@ -37,28 +38,39 @@ class LevelSummary(eqx.Module):
     """(terms, blocks, blocks): covariance of the block means per unit parameter^2."""
 
 
-def _block_edges(values: np.ndarray) -> list[tuple[int, int]]:
+def _block_edges(values) -> list[tuple[int, int]]:
     """Blocks [start, stop) that never contain a missing sample."""
-    n = values.size
+    n = series_size(values)
     cuts = set(np.unique(np.round(np.geomspace(1, n, GEOMETRIC_BLOCKS)).astype(int)).tolist())
     cuts |= set(np.linspace(0, n, EVEN_BLOCKS + 1).astype(int).tolist())
-    present = ~np.isnan(values)
-    runs = np.flatnonzero(np.diff(np.concatenate(([0], present.astype(np.int8), [0]))))
-    blocks = []
-    for start, stop in zip(runs[::2], runs[1::2], strict=True):
+    edges_of_blocks = []
+    for start, stop in gap_free_runs(values).tolist():
         inner = sorted(c for c in cuts if start < c < stop)
-        edges = [start, *inner, stop]
-        blocks += list(itertools.pairwise(edges))
-    return blocks
+        edges_of_blocks += list(itertools.pairwise([start, *inner, stop]))
+    return edges_of_blocks
+
+
+def _block_means(values, edges: np.ndarray) -> np.ndarray:
+    """The mean of values[start:stop] for each block, read a block of the series at a time
+    (each level block's sum gathered from the pieces of it in each read)."""
+    sums = np.zeros(len(edges))
+    for first, part in blocks(values):
+        last = first + part.size
+        inside = np.flatnonzero((edges[:, 0] < last) & (edges[:, 1] > first))
+        for index in inside.tolist():
+            a, b = max(edges[index, 0], first), min(edges[index, 1], last)
+            sums[index] += part[a - first : b - first].sum()
+    return sums / (edges[:, 1] - edges[:, 0])
 
 
 def level_summary(values, rate_hz: float) -> LevelSummary:
-    """Block means of a rate series (NaN marks missing samples) and their covariance bases."""
-    values = np.asarray(values, dtype=float)
-    blocks = np.array(_block_edges(values), dtype=np.int64)
-    start, stop = blocks[:, 0], blocks[:, 1]
+    """Block means of a rate series (NaN marks missing samples; an array or a spooled
+    series) and their covariance bases."""
+    values = values if is_spooled(values) else np.asarray(values, dtype=float)
+    edges = np.array(_block_edges(values), dtype=np.int64)
+    start, stop = edges[:, 0], edges[:, 1]
     return LevelSummary(
-        block_mean=np.array([values[a:b].mean() for a, b in blocks]),
+        block_mean=_block_means(values, edges),
         block_time_s=(start + stop) / 2.0 / rate_hz,
         basis=block_covariance_basis(start, stop, rate_hz),
     )

@@ -44,7 +44,12 @@ Extra stationary components with a shape fixed in advance (a Gauss-Markov term a
 correlation time) are given by the autocovariance of their increments.
 
 The mean increment, R / fs for a rate ramp R, enters as one more Gaussian term (its variance
-again exact for the taper). Records with gaps contribute one periodogram per segment. Each
+again exact for the taper). Records with gaps contribute one periodogram per segment, and
+so do the pieces of a long segment: a run longer than MAX_SEGMENT samples is cut into equal
+pieces no longer than that, each its own periodogram. That bounds the memory of the summary
+(one piece's FFT and its expected periodogram, a few hundred MB, whatever the record's
+length), and costs only the lowest few ordinates of the whole run, below 1 / (piece
+duration): the pieces together hold as many ordinates in every band above it. Each
 segment's increments are cut to the longest length with no prime factor above 5 (dropping at
 most a few percent at its end), for which FFTs are fast; a length such as 2^23 - 1 would
 otherwise cost a minute.
@@ -61,11 +66,15 @@ from scipy.signal import windows
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
+from ..recording._series import gap_free_runs, is_spooled, read
 from ._components import SPECTRAL_TERMS, increment_autocovariance_shapes
 
 TAPER_FRACTION = 0.1
 BIN_WIDTH = 0.02
 MIN_INCREMENTS = 32
+MAX_SEGMENT = 1 << 21
+"""Samples in the longest piece one periodogram is taken of (a longer gap-free run is cut
+into equal pieces): 5.8 h at 100 Hz."""
 
 
 class SpectralSummary(eqx.Module):
@@ -109,15 +118,18 @@ class SpectralSummary(eqx.Module):
         return np.sum(self.node_power, axis=0)
 
 
-def _segment_bounds(values: np.ndarray, minimum: int) -> list[tuple[int, int]]:
-    """[start, stop) of each run of more than ``minimum`` samples without NaN."""
-    present = ~np.isnan(values)
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], present.astype(np.int8), [0]))))
-    return [
-        (int(start), int(stop))
-        for start, stop in zip(edges[::2], edges[1::2], strict=True)
-        if stop - start > minimum
-    ]
+def _segment_bounds(values, minimum: int) -> list[tuple[int, int]]:
+    """[start, stop) of each run of more than ``minimum`` samples without NaN, a run longer
+    than MAX_SEGMENT cut into equal pieces no longer than that (the few samples left over at
+    its end unused)."""
+    bounds = []
+    for start, stop in gap_free_runs(values).tolist():
+        if stop - start <= minimum:
+            continue
+        pieces = -(-(stop - start) // MAX_SEGMENT)
+        length = (stop - start) // pieces
+        bounds += [(start + k * length, start + (k + 1) * length) for k in range(pieces)]
+    return bounds
 
 
 def _fast_length_at_most(length: int) -> int:
@@ -245,10 +257,12 @@ def spectral_summary(
     parts = {
         name: [] for name in ("count", "frequency_hz", "node_power", "node_count", "node_frequency")
     }
-    basis, weight, mean_increment, mean_basis = [], [], [], []
-    values = np.asarray(values, dtype=float)
+    basis, weight, mean_increment, mean_basis, lengths = [], [], [], [], []
+    if is_spooled(values) and regressors is not None:
+        raise InputError("regressors: a spooled (long) record is summarised without them")
+    values = values if is_spooled(values) else np.asarray(values, dtype=float)
     for start, stop in _segment_bounds(values, MIN_INCREMENTS):
-        increments = np.diff(values[start:stop])
+        increments = np.diff(read(values, start, stop))
         increments = increments[: _fast_length_at_most(increments.size)]
         length = increments.size
         taper, _ = _taper(length, taper_fraction)
@@ -303,23 +317,39 @@ def spectral_summary(
         parts["node_count"].append(_bin_sums(np.ones_like(u), hats, lows - 1))
         parts["node_frequency"].append(nodes / length)
         weight.append(np.full(counts.size, information))
+        lengths.append(length)
     if not parts["count"]:
         raise InputError(
             f"no run of more than {MIN_INCREMENTS} samples without a gap",
             fix="record longer, or pick a window without gaps",
         )
-    arrays = {name: np.concatenate(values_, axis=-1) for name, values_ in parts.items()}
+    # Segments of one length share their bins, nodes and expected periodogram: their bins
+    # are pooled (powers and counts summed), which leaves the likelihood as it is and keeps
+    # the bins of a long record's equal pieces to one segment's few hundred.
+    groups = {}
+    for index, length in enumerate(lengths):
+        groups.setdefault(length, []).append(index)
+    members = list(groups.values())
+    summed, first = ("count", "node_power", "node_count"), ("frequency_hz", "node_frequency")
+
+    def pooled(items, add):
+        return np.concatenate(
+            [sum(items[i] for i in group) if add else items[group[0]] for group in members],
+            axis=-1,
+        )
+
+    arrays = {name: pooled(parts[name], name in summed) for name in (*summed, *first)}
     regression = {}
     if regressors is not None:
         regression = {
-            "cross": np.concatenate(cross, axis=-1),
-            "gram": np.concatenate(gram, axis=-1),
+            "cross": pooled(cross, True),
+            "gram": pooled(gram, True),
             "mean_regressor": np.array(mean_regressor),
         }
     return SpectralSummary(
         **arrays,
-        basis=np.concatenate(basis, axis=-1),
-        weight=np.concatenate(weight),
+        basis=pooled(basis, False),
+        weight=pooled(weight, False),
         mean_increment=np.array(mean_increment),
         mean_basis=np.array(mean_basis).T,
         rate_hz=float(rate_hz),

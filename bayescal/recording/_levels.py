@@ -9,7 +9,11 @@ clipped, and models it. :func:`discrete_step` finds the grid of levels a quantiz
 on.
 """
 
+import functools
+
 import numpy as np
+
+from ._series import blocks, is_spooled
 
 SIDES = ("upper", "lower")
 MIN_LEVELS = 5
@@ -45,28 +49,56 @@ class Levels:
     that at least two samples share within the noise."""
 
     def __init__(self, values: np.ndarray):
-        finite = values[np.isfinite(values)]
-        self.levels, self.inverse, self.counts = np.unique(
-            finite, return_inverse=True, return_counts=True
-        )
-        self.n = finite.size
+        self._finite = values[np.isfinite(values)]
+        ordered = np.sort(self._finite)
+        first = np.flatnonzero(np.concatenate(([True], ordered[1:] != ordered[:-1])))
+        self.levels = ordered[first]
+        self.counts = np.diff(np.append(first, ordered.size))
+        self.n = ordered.size
         self.rails = {}
         if self.levels.size < MIN_LEVELS:
             return
         self.step = float(np.min(np.diff(self.levels)))
-        median = np.median(finite)
-        spread = 1.4826 * np.median(np.abs(finite - median))
+        median = np.median(ordered)
+        spread = 1.4826 * np.median(np.abs(ordered - median))
         for side in SIDES:
             rail, count = self.levels[END[side]], self.counts[END[side]]
             if count >= 2 and abs(rail - median) <= RAIL_SIGMAS * spread:
                 self.rails[side] = (float(rail), int(count))
 
+    @functools.cached_property
+    def inverse(self) -> np.ndarray:
+        """The level of each finite sample, as an index into :attr:`levels`."""
+        return np.searchsorted(self.levels, self._finite)
 
-def discrete_step(values: np.ndarray) -> float:
-    """The spacing of the levels the samples sit on, or 0 when they are not on a grid."""
-    finite = values[np.isfinite(values)]
-    levels = np.unique(finite)
-    if levels.size > finite.size / 4 or levels.size < 3:
+
+MAX_GRID_LEVELS = 1 << 20
+"""A spooled (long) record whose samples take more distinct values than this is read as on
+no grid: its step would be below a thousandth of a noise spanning them, and its rounding
+(step^2 / 12) nothing beside the noise."""
+
+
+def _distinct_levels(values) -> tuple[np.ndarray, int]:
+    """The distinct finite values and the number of finite samples; for a spooled series
+    gathered block by block, stopping (levels None) beyond MAX_GRID_LEVELS."""
+    if not is_spooled(values):
+        finite = values[np.isfinite(values)]
+        return np.unique(finite), finite.size
+    levels, n = np.empty(0), 0
+    for _, block in blocks(values):
+        finite = block[np.isfinite(block)]
+        n += finite.size
+        levels = np.union1d(levels, finite)
+        if levels.size > MAX_GRID_LEVELS:
+            return None, n
+    return levels, n
+
+
+def discrete_step(values) -> float:
+    """The spacing of the levels the samples sit on, or 0 when they are not on a grid
+    (``values``: an array or a spooled series)."""
+    levels, n = _distinct_levels(values)
+    if levels is None or levels.size > n / 4 or levels.size < 3:
         return 0.0
     steps = np.diff(levels)
     step = float(np.min(steps))

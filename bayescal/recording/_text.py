@@ -182,10 +182,10 @@ def _spaces_to_commas(path: Path, encoding: str, skip: int, cut: str | None) -> 
     return io.BytesIO(body.encode("utf-8"))
 
 
-def read_text_arrow(path: Path, source: str, skip_rows: int, names: list[str] | None):
-    """The text table at ``path`` as a pyarrow Table, with its header names (or generated
-    ones) and the reader's notes."""
-    import pyarrow as pa
+def text_arrow_options(path: Path, source: str, skip_rows: int, names: list[str] | None):
+    """How pyarrow reads the text table at ``path``: (source stream, read, parse and convert
+    options, the reader's notes) — for one read (:func:`read_text_arrow`) or a stream of
+    blocks (:mod:`bayescal.recording._stream`)."""
     import pyarrow.csv as pa_csv
 
     layout = sniff_table(path, source, skip_rows)
@@ -238,6 +238,16 @@ def read_text_arrow(path: Path, source: str, skip_rows: int, names: list[str] | 
         else lambda row: "skip" if row.text == cut else "error",
     )
     convert = pa_csv.ConvertOptions(decimal_point=layout["decimal_point"])
+    return stream, read, parse, convert, notes
+
+
+def read_text_arrow(path: Path, source: str, skip_rows: int, names: list[str] | None):
+    """The text table at ``path`` as a pyarrow Table, with its header names (or generated
+    ones) and the reader's notes."""
+    import pyarrow as pa
+    import pyarrow.csv as pa_csv
+
+    stream, read, parse, convert, notes = text_arrow_options(path, source, skip_rows, names)
     try:
         table = pa_csv.read_csv(
             stream, read_options=read, parse_options=parse, convert_options=convert
@@ -247,7 +257,7 @@ def read_text_arrow(path: Path, source: str, skip_rows: int, names: list[str] | 
         detail = detail if len(detail) <= 160 else detail[:157] + "..."
         hint = ""
         row = detail.partition(": ")[2]
-        if delimiter == "," and "." not in row and re.search(r"\d,\d", row):
+        if parse.delimiter == "," and "." not in row and re.search(r"\d,\d", row):
             hint = " (decimal commas in a comma-separated file?)"
         raise InputError(
             f"cannot read it as a table: {detail}{hint}",

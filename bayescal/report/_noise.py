@@ -3,14 +3,16 @@ of ``bayescal noise`` and as the table it prints."""
 
 import math
 from importlib.metadata import version
+from typing import TYPE_CHECKING
 
-from ..capabilities._noise import NoiseFit
 from ..classical._noise import ClassicalNoise, SlopeReading
-from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN_ESS
-from ..inference._noise_posterior import NoisePosterior
 from ..models._noise_model import parameter_unit
 from ..models._terms import FILTER_SHAPE_OF_TERM, TERM_OF_PARAMETER
 from ..recording._units import display_values
+
+if TYPE_CHECKING:  # the Bayesian modules load only for a Bayesian result (--classical-only)
+    from ..capabilities._noise import NoiseFit
+    from ..inference._noise_posterior import NoisePosterior
 
 # Why a classical number and the posterior can disagree, by parameter.
 _WHY = {
@@ -77,7 +79,9 @@ def _t_interval_explanation(classical: ClassicalNoise) -> str:
     )
 
 
-def _bayesian_block(fit: NoisePosterior, unit: str) -> dict:
+def _bayesian_block(fit: "NoisePosterior", unit: str) -> dict:
+    from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN_ESS
+
     parameters = {}
     for name, summary in fit.parameters.items():
         unit_of_parameter = parameter_unit(name, unit)
@@ -119,7 +123,7 @@ def _bayesian_block(fit: NoisePosterior, unit: str) -> dict:
     }
 
 
-def comparison_notes(classical: ClassicalNoise, fit: NoisePosterior, unit: str) -> list[str]:
+def comparison_notes(classical: ClassicalNoise, fit: "NoisePosterior", unit: str) -> list[str]:
     """Where the classical numbers and the posterior disagree beyond their uncertainties,
     and why."""
     notes = []
@@ -189,7 +193,7 @@ def _normal_quantile(confidence: float) -> float:
 
 
 def noise_result(
-    data, classical: ClassicalNoise, window: dict, noise: NoiseFit | None = None
+    data, classical: ClassicalNoise, window: dict, noise: "NoiseFit | None" = None
 ) -> dict:
     """The JSON document of ``bayescal noise`` (contract in the README). ``data`` names the
     channel: its ``source``, ``channel``, ``unit`` and ``notes`` (a Channel or a NoiseFit);

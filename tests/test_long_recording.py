@@ -93,8 +93,9 @@ def test_modified_allan_of_a_spooled_series_is_refused_by_name(gapped):
 
 def test_summaries_of_a_spooled_series_are_the_in_memory_ones(small_blocks, gapped):
     disk = spooled(gapped)
-    memory_classical, disk_classical = bc.classical_noise(gapped, RATE), bc.classical_noise(
-        disk, RATE
+    memory_classical, disk_classical = (
+        bc.classical_noise(gapped, RATE),
+        bc.classical_noise(disk, RATE),
     )
     assert memory_classical.n_samples == disk_classical.n_samples
     for name in ("bias", "bias_ci_low", "bias_ci_high", "std", "duration_s"):

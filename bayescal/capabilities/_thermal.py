@@ -334,7 +334,8 @@ class ThermalCalibration:
         ----------
         y, temperature : array_like
             The channel (its unit) and its temperature, on one sample grid; NaN marks a
-            missing sample.
+            missing sample. The Earth rate this calibration took off (if any) is taken off
+            ``y`` too.
         rate_hz : float
             Sample rate, Hz.
         periods : tuple of (start, stop), optional
@@ -345,8 +346,6 @@ class ThermalCalibration:
         drift : float, "auto" or None
             How far the bias may have moved since this calibration (channel unit, at T0):
             ``"auto"`` learns it, 0 or None assumes no change.
-
-        The Earth rate this calibration took off (if any) is taken off ``y`` too.
         seed : int
             Seed of the sampler.
 

@@ -76,6 +76,9 @@ class NoiseModel(eqx.Module):
     """Bias plus the noise terms of a static channel; one object whose simulator, Allan
     variance, spectrum and likelihood share its parameters (in the channel's unit U).
 
+    A parameter of zero leaves its term out. Parameters may be JAX arrays (a batch of draws
+    broadcasts through :meth:`allan_variance` and :meth:`psd`).
+
     Parameters
     ----------
     rate_hz : float
@@ -100,9 +103,6 @@ class NoiseModel(eqx.Module):
     lsb : float
         The output's resolution, U: the samples are rounded to multiples of it (zero: not
         rounded).
-
-    A parameter of zero leaves its term out. Parameters may be JAX arrays (a batch of draws
-    broadcasts through :meth:`allan_variance` and :meth:`psd`).
 
     Examples
     --------

@@ -1,0 +1,45 @@
+"""MkDocs hook: the studies that read real recordings need ../shared/data beside the repository
+(read in place, never copied). Where it is absent (a clean checkout elsewhere), those notebooks
+are rendered without being executed, and each such page opens with a note that says so, so that
+the build still checks every other page and every notebook that can run. Which notebooks need
+the data is their own metadata (``"bayescal": {"requires": ["shared_data"]}``)."""
+
+import json
+import logging
+from pathlib import Path
+
+REPOSITORY = Path(__file__).resolve().parents[1]
+SHARED_DATA = REPOSITORY.parent / "shared" / "data"
+NOTEBOOKS = REPOSITORY / "notebooks"
+
+log = logging.getLogger("mkdocs.hooks.bayescal")
+_unexecuted: set[str] = set()
+
+
+def _needs_shared_data(notebook: Path) -> bool:
+    metadata = json.loads(notebook.read_text(encoding="utf-8")).get("metadata", {})
+    return "shared_data" in metadata.get("bayescal", {}).get("requires", [])
+
+
+def on_config(config):
+    if SHARED_DATA.is_dir():
+        return config
+    plugin = config.plugins["mkdocs-jupyter"]
+    for notebook in sorted(NOTEBOOKS.glob("*.ipynb")):
+        if _needs_shared_data(notebook):
+            plugin.config["execute_ignore"].append(f"notebooks/{notebook.name}")
+            _unexecuted.add(notebook.name)
+            log.info("%s not executed: %s is absent", notebook.name, SHARED_DATA)
+    return config
+
+
+def on_page_content(html, page, config, files):
+    name = Path(page.file.src_uri).name
+    if name in _unexecuted:
+        note = (
+            '<div class="admonition warning"><p class="admonition-title">Not executed</p>'
+            f"<p>This build had no <code>../shared/data</code>, which this study reads; it is "
+            "shown without its outputs.</p></div>"
+        )
+        return note + html
+    return html

@@ -38,7 +38,7 @@ def on_page_content(html, page, config, files):
     if name in _unexecuted:
         note = (
             '<div class="admonition warning"><p class="admonition-title">Not executed</p>'
-            f"<p>This build had no <code>../shared/data</code>, which this study reads; it is "
+            "<p>This build had no <code>../shared/data</code>, which this study reads; it is "
             "shown without its outputs.</p></div>"
         )
         return note + html

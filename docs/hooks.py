@@ -1,12 +1,23 @@
-"""MkDocs hook: the studies that read real recordings need ../shared/data beside the repository
-(read in place, never copied). Where it is absent (a clean checkout elsewhere), those notebooks
-are rendered without being executed, and each such page opens with a note that says so, so that
-the build still checks every other page and every notebook that can run. Which notebooks need
-the data is their own metadata (``"bayescal": {"requires": ["shared_data"]}``)."""
+"""MkDocs hooks.
 
+The studies that read real recordings need ../shared/data beside the repository (read in place,
+never copied). Where it is absent (a clean checkout elsewhere), those notebooks are rendered
+without being executed, and each such page opens with a note that says so, so that the build
+still checks every other page and every notebook that can run. Which notebooks need the data is
+their own metadata (``"bayescal": {"requires": ["shared_data"]}``).
+
+The pages' equations (``\\( ... \\)`` and ``\\[ ... \\]``, marked by pymdownx.arithmatex) are
+converted to MathML when the site is built (latex2mathml), which browsers render natively: the
+site needs no script from a CDN and reads the same offline.
+"""
+
+import html
 import json
 import logging
+import re
 from pathlib import Path
+
+from latex2mathml.converter import convert
 
 REPOSITORY = Path(__file__).resolve().parents[1]
 SHARED_DATA = REPOSITORY.parent / "shared" / "data"
@@ -33,13 +44,22 @@ def on_config(config):
     return config
 
 
-def on_page_content(html, page, config, files):
-    name = Path(page.file.src_uri).name
-    if name in _unexecuted:
+_INLINE = re.compile(r'<span class="arithmatex">\\\((.+?)\\\)</span>', re.S)
+_DISPLAY = re.compile(r'<div class="arithmatex">\\\[(.+?)\\\]</div>', re.S)
+
+
+def _mathml(match: re.Match, display: str) -> str:
+    return convert(html.unescape(match[1]).strip(), display=display)
+
+
+def on_page_content(content, page, config, files):
+    content = _DISPLAY.sub(lambda match: _mathml(match, "block"), content)
+    content = _INLINE.sub(lambda match: _mathml(match, "inline"), content)
+    if Path(page.file.src_uri).name in _unexecuted:
         note = (
             '<div class="admonition warning"><p class="admonition-title">Not executed</p>'
             "<p>This build had no <code>../shared/data</code>, which this study reads; it is "
             "shown without its outputs.</p></div>"
         )
-        return note + html
-    return html
+        return note + content
+    return content

@@ -5,7 +5,7 @@ First, two effects of single samples are scanned for on the samples' distributio
 accepted on a decisive Bayes factor: clipping at a rail (``saturation``,
 :mod:`bayescal._saturation`; the clipped samples are imputed for what follows) and isolated
 glitches (``outliers``, replaced by their neighbours' mean). Then the loop (documented for
-users in the README, section "Discovery"):
+users in docs/guide/discovery.md):
 
 1. fit the current model — bias, noise terms and deterministic terms — by its Whittle
    likelihood (:mod:`bayescal._whittle`): the periodogram of the increments of the data minus

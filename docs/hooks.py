@@ -6,6 +6,12 @@ without being executed, and each such page opens with a note that says so, so th
 still checks every other page and every notebook that can run. Which notebooks need the data is
 their own metadata (``"bayescal": {"requires": ["shared_data"]}``).
 
+The notebooks' kernels inherit this process's environment: JAX's persistent compilation cache
+is switched on there as the command line does (``~/.cache/bayescal/jax``), so that a notebook
+reuses what another, or an earlier build, compiled. Its key is the compiled computation itself,
+so a change of the library can never be served a stale result (unlike mkdocs-jupyter's page
+cache, which mkdocs.yml leaves off).
+
 The pages' equations (``\\( ... \\)`` and ``\\[ ... \\]``, marked by pymdownx.arithmatex) are
 converted to MathML when the site is built (latex2mathml), which browsers render natively: the
 site needs no script from a CDN and reads the same offline.
@@ -18,6 +24,8 @@ import re
 from pathlib import Path
 
 from latex2mathml.converter import convert
+
+from bayescal.cli._main import _enable_compilation_cache
 
 REPOSITORY = Path(__file__).resolve().parents[1]
 SHARED_DATA = REPOSITORY.parent / "shared" / "data"
@@ -33,6 +41,7 @@ def _needs_shared_data(notebook: Path) -> bool:
 
 
 def on_config(config):
+    _enable_compilation_cache()
     if SHARED_DATA.is_dir():
         return config
     plugin = config.plugins["mkdocs-jupyter"]

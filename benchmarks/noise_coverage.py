@@ -8,7 +8,7 @@ least 200 records. The record: 10 Hz, white noise, bias instability and a rate r
 that dominates the lowest frequencies, the default model. (When a term dominates only a
 handful of the lowest frequencies — this same sensor recorded for a quarter of the time —
 its interval is informed by a few periodogram ordinates and the prior, and its coverage
-drops to about 80 %; see the README.)
+drops to about 80 %.)
 """
 
 import argparse

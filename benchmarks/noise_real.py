@@ -13,7 +13,7 @@ Recordings (../shared/data, each folder's SOURCE.txt says where from):
 - a flight computer on the pad (ISSUIUC TARS mk2, 2021-10-30, the quiet window before
   liftoff, 100 Hz), gyro x and accelerometer x.
 
-The table the README shows is this script's output.
+The table in docs/methods/validation.md ("Real recordings") is this script's output.
 """
 
 import argparse

@@ -4,14 +4,12 @@ behind it, the discovery section, and the page in a real browser (headless chrom
 import base64
 import io
 import json
-import os
 import re
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
 import xarray as xr
+from browser import chromium, rendered, run_browser
 
 import bayescal as bc
 
@@ -264,69 +262,19 @@ def test_report_bad_input_exit_2(run_cli, report, tmp_path):
     assert code == 2 and "no such sensor card" in stderr
 
 
-def _chromium() -> str:
-    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
-        path = shutil.which(name)
-        if path:
-            return path
-    if os.environ.get("CI", "").lower() == "true":
-        pytest.fail("chromium is not installed (.ci/run installs Debian's chromium)")
-    pytest.skip("chromium not installed (apt-get install chromium); CI installs it")
-
-
-_CHECKER = """<script>
-window.addEventListener("load", function () {
-  var images = Array.from(document.images);
-  var decoded = images.filter(function (img) { return img.complete && img.naturalWidth > 0; });
-  var marker = document.createElement("div");
-  marker.id = "bayescal-image-check";
-  marker.textContent = "images " + decoded.length + "/" + images.length;
-  document.body.appendChild(marker);
-});
-</script>"""
-
-
-def _browser(binary, profile, *arguments):
-    command = [
-        binary,
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--disable-quic",
-        "--no-first-run",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--disable-dev-shm-usage",
-        f"--user-data-dir={profile}",
-        *arguments,
-    ]
-    return subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
-
-
 def test_page_renders_in_a_browser(report, tmp_path):
     from matplotlib.image import imread
 
-    binary = _chromium()
     outcome, _ = report
     page = outcome.html.read_text()
-    checked = tmp_path / "checked.html"
-    checked.write_text(page.replace("</body>", _CHECKER + "</body>"))
-    result = _browser(
-        binary, tmp_path / "profile", "--virtual-time-budget=10000", "--dump-dom",
-        checked.as_uri(),
-    )  # fmt: skip
-    assert result.returncode == 0, result.stderr[-2000:]
-    match = re.search(r'id="bayescal-image-check">images (\d+)/(\d+)<', result.stdout)
-    assert match, "the page's load handler did not run: " + result.stderr[-2000:]
-    decoded, total = int(match[1]), int(match[2])
+    dom, decoded, total = rendered(outcome.html, tmp_path / "profile")
     assert total == len(IMAGE.findall(page)) and total > 0
     assert decoded == total, f"only {decoded} of {total} figures decoded in the browser"
-    assert "Posterior health checks" in result.stdout
+    assert "Posterior health checks" in dom
 
     screenshot = tmp_path / "page.png"
-    result = _browser(
-        binary, tmp_path / "profile", f"--screenshot={screenshot}", "--window-size=1280,2000",
+    result = run_browser(
+        chromium(), tmp_path / "profile", f"--screenshot={screenshot}", "--window-size=1280,2000",
         outcome.html.as_uri(),
     )  # fmt: skip
     assert result.returncode == 0 and screenshot.is_file(), result.stderr[-2000:]

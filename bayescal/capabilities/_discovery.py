@@ -5,7 +5,7 @@ First, two effects of single samples are scanned for on the samples' distributio
 accepted on a decisive Bayes factor: clipping at a rail (``saturation``,
 :mod:`bayescal._saturation`; the clipped samples are imputed for what follows) and isolated
 glitches (``outliers``, replaced by their neighbours' mean). Then the loop (documented for
-users in the README, section "Discovery"):
+users in docs/guide/discovery.md):
 
 1. fit the current model — bias, noise terms and deterministic terms — by its Whittle
    likelihood (:mod:`bayescal._whittle`): the periodogram of the increments of the data minus
@@ -807,8 +807,12 @@ class FoundEffect:
     located."""
 
     name: str
+    """The catalogue's name of the effect (``thermal_bias``, ``rate_random_walk``,
+    ``sinusoid``, ``saturation`` ...)."""
     explanation: str
+    """What it is and what it does to the record, in a sentence for the user."""
     parameters: dict
+    """parameter -> ``{mean, sd, q05, q95, unit}`` from the final model's posterior."""
     evidence: dict
     """log Bayes factor against the model without it (and the threshold), the checks of the
     baseline it answers, the runner-up and whether it is indistinguishable from it."""
@@ -817,11 +821,29 @@ class FoundEffect:
     delta_elpd: float
     """Gain in expected log predictive density (nats; AIC-penalised)."""
     delta_elpd_se: float
+    """Its standard error, nats (pointwise over frequency bins and block-mean predictions)."""
 
 
 @dataclass(frozen=True)
 class CheckResult:
-    """One check of the baseline model, and of the final one."""
+    """One check of the baseline model, and of the final one.
+
+    Attributes
+    ----------
+    name : str
+        The check (``allan_deviation``, ``spectrum``, ``spectral_line``, ``residual_vs_time``,
+        ``residual_vs_temperature``, ``tails``, ``rail``, ``levels``, ``time_stamps`` ...).
+    statistic : float
+        Its statistic on the baseline model's residual.
+    p_value : float
+        Its p-value, Bonferroni-corrected over the places it looked.
+    location : dict
+        Where it points (a tau range, a band, a frequency, a time window, a covariate).
+    passed_before, passed_after : bool
+        Whether it passed for the baseline model, and for the final one (p >= 0.01).
+    p_value_after : float or None
+        Its p-value for the final model.
+    """
 
     name: str
     statistic: float
@@ -842,14 +864,21 @@ class Discovery:
     """
 
     channel: str
+    """The channel's name."""
     unit: str
+    """The channel's unit."""
     rate_hz: float
+    """Sample rate, Hz."""
     duration_s: float
+    """Length of the record, s."""
     baseline: tuple[str, ...]
     """The starting model's terms, the bias first."""
     effects: tuple[FoundEffect, ...]
+    """The effects named, in the order they were accepted."""
     checks: tuple[CheckResult, ...]
+    """Every check of the baseline model, with its result for the final one."""
     final_terms: tuple[str, ...]
+    """The final model's terms: the baseline's and those of the effects named."""
     unexplained: dict | None
     """A mismatch left with no decisive term: the failing checks, the best candidate and its
     log Bayes factor, what to do."""
@@ -860,11 +889,25 @@ class Discovery:
 
     @property
     def passed(self) -> bool:
+        """Whether the final posterior passed its sampler checks (True when nothing was
+        found, so nothing was sampled)."""
         return self.posterior is None or bool(self.posterior.diagnostics.passed)
 
     def check(self) -> "Discovery":
         """Raise :class:`~bayescal.HealthCheckError` when the final posterior failed its
-        checks."""
+        checks.
+
+        Returns
+        -------
+        Discovery
+            This result, unchanged, when every check passed, so that the call chains
+            (``result = capability(...).check()``).
+
+        Raises
+        ------
+        HealthCheckError
+            A check failed; the message names each.
+        """
         if not self.passed:
             raise HealthCheckError(
                 f"discovery on {self.channel}: the final posterior failed its checks: "
@@ -1123,9 +1166,9 @@ def discover(
     --------
     >>> import numpy as np
     >>> import bayescal as bc
-    >>> rate, n = 50.0, 2**16
-    >>> t = np.arange(n) / rate
-    >>> temperature = 25 + 10 * (1 - np.exp(-t / 300))
+    >>> rate, n = 50.0, 2**14
+    >>> t = np.arange(n) / rate  # s
+    >>> temperature = 25 + 10 * (1 - np.exp(-t / 100))  # degC, warming up
     >>> y = bc.NoiseModel(rate_hz=rate, N=0.007).simulate(n, seed=2) + 0.002 * temperature
     >>> found = bc.discover(y, rate, temperature=temperature, unit="deg/s")
     >>> [effect.name for effect in found.effects]

@@ -364,18 +364,27 @@ class FleetFit:
     source: str
     """The manifest."""
     channel: str
+    """The channel fitted in every recording."""
     unit: str
     """The channel's unit, common to the fleet."""
     terms: tuple[str, ...]
+    """The noise terms every recording was fitted with."""
     recordings: tuple[RecordingDraws, ...] = field(repr=False)
     """What each recording's fit shipped back (those that passed)."""
     failed: tuple[RecordingFailure, ...]
+    """The recordings left out (unreadable, failed sampler checks, a misfit), by path, with
+    the reason."""
     population: PopulationPosterior = field(repr=False)
+    """The population's posterior: medians and log-sds of the noise scales, the turn-on bias's
+    mean and unit-to-unit and run-to-run sds, each unit's shrunk estimate, with checks."""
     limits: tuple[Limit, ...]
+    """The specifications asked for (``N<0.3 deg/sqrt(h)``), each in the parameter's unit."""
     compute: dict
     """Where the work ran: scheduler, workers, tasks, and the tasks' times and sizes."""
     seed: int
+    """The seed of every fit (the same inputs and seed give the same fleet)."""
     notes: tuple[str, ...] = ()
+    """What was inferred or noticed along the way."""
 
     @property
     def parameters(self) -> tuple[str, ...]:
@@ -384,6 +393,7 @@ class FleetFit:
 
     @property
     def units(self) -> tuple[str, ...]:
+        """The units' ids in the population, in manifest order."""
         return self.population.units
 
     @property
@@ -394,10 +404,23 @@ class FleetFit:
 
     @property
     def failures(self) -> tuple[str, ...]:
+        """The population's failed checks (empty when it passed)."""
         return self.population.failures
 
     def check(self) -> "FleetFit":
-        """Raise :class:`~bayescal.HealthCheckError` naming the failed checks, if any."""
+        """Raise :class:`~bayescal.HealthCheckError` naming the failed checks, if any.
+
+        Returns
+        -------
+        FleetFit
+            This result, unchanged, when every check passed, so that the call chains
+            (``result = capability(...).check()``).
+
+        Raises
+        ------
+        HealthCheckError
+            A check failed; the message names each.
+        """
         if not self.passed:
             raise HealthCheckError("population: checks failed: " + "; ".join(self.failures))
         return self

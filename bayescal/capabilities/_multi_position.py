@@ -115,18 +115,39 @@ class MultiPositionCalibration:
     posterior."""
 
     unit: str
+    """The readings' unit (counts welcome); offsets are in it, scales in m/s^2 per it."""
     rate_hz: float | None
+    """Sample rate, Hz (None for poses given as means)."""
     poses: Poses
+    """The still poses used: mean, sd, count and times of each."""
     found_by: str
+    """How the poses were found (still sections of the recording, or given)."""
     classical: ClassicalCalibration
+    """Least squares at g = g_local: scales K, offsets b, misalignment angles (rad) with
+    covariance s^2 (J^T J)^-1 and Student-t half-widths; the calibration matrices."""
     bayesian: BayesianCalibration | None
+    """The posterior (draws, MAP with Laplace sd, sampler checks); None with
+    ``bayesian=False``."""
 
     @property
     def passed(self) -> bool:
+        """Whether the posterior passed its sampler checks (True when none was sampled)."""
         return self.bayesian is None or bool(self.bayesian.diagnostics.passed)
 
     def check(self) -> "MultiPositionCalibration":
-        """Raise :class:`~bayescal.HealthCheckError` when the posterior failed its checks."""
+        """Raise :class:`~bayescal.HealthCheckError` when the posterior failed its checks.
+
+        Returns
+        -------
+        MultiPositionCalibration
+            This result, unchanged, when every check passed, so that the call chains
+            (``result = capability(...).check()``).
+
+        Raises
+        ------
+        HealthCheckError
+            A check failed; the message names each.
+        """
         if not self.passed:
             raise HealthCheckError(
                 "multi-position: posterior checks failed: "

@@ -237,11 +237,15 @@ class ThermalCalibration:
     """
 
     channel: str
+    """The channel it was made for."""
     unit: str
+    """The channel's unit (the bias's unit)."""
     temperature_unit: str
+    """The temperature's unit (degC unless the column's header said otherwise)."""
     reference: float
     """T0, in ``temperature_unit``."""
     degree: int
+    """The polynomial's degree d."""
     coefficients: np.ndarray
     """Posterior mean of c_0..c_d."""
     covariance: np.ndarray
@@ -269,6 +273,7 @@ class ThermalCalibration:
 
     @property
     def coefficient_units(self) -> list[str]:
+        """The unit of each coefficient c_j: the channel's unit per temperature unit^j."""
         return _coefficient_units(self.unit, self.temperature_unit, self.degree)
 
     @property
@@ -279,13 +284,26 @@ class ThermalCalibration:
 
     @property
     def failures(self) -> list[str]:
+        """The failed sampler checks of the posterior behind it (empty when it passed)."""
         diagnostics = self.bayesian.get("diagnostics")
         if diagnostics is None:
             return ["the calibration carries no record of its posterior checks"]
         return list(diagnostics.get("failures", []))
 
     def check(self) -> "ThermalCalibration":
-        """Raise :class:`~bayescal.HealthCheckError` naming the failed checks, if any."""
+        """Raise :class:`~bayescal.HealthCheckError` naming the failed checks, if any.
+
+        Returns
+        -------
+        ThermalCalibration
+            This result, unchanged, when every check passed, so that the call chains
+            (``result = capability(...).check()``).
+
+        Raises
+        ------
+        HealthCheckError
+            A check failed; the message names each.
+        """
         if not self.passed:
             raise HealthCheckError(
                 "thermal calibration: posterior checks failed: " + "; ".join(self.failures)
@@ -293,8 +311,19 @@ class ThermalCalibration:
         return self
 
     def bias(self, temperature) -> tuple[np.ndarray, np.ndarray]:
-        """The thermal bias at ``temperature`` (in ``temperature_unit``) and its posterior sd,
-        both in the channel's unit (the Earth rate, if taken off, not included)."""
+        """The thermal bias at ``temperature`` and its posterior sd.
+
+        Parameters
+        ----------
+        temperature : array_like
+            Temperatures, ``temperature_unit``.
+
+        Returns
+        -------
+        bias, sd : numpy.ndarray
+            The bias (posterior mean of the polynomial) and its posterior sd at each
+            temperature, the channel's unit (the Earth rate, if taken off, not included).
+        """
         temperature = np.asarray(temperature, dtype=float)
         powers = (temperature[..., None] - self.reference) ** np.arange(self.degree + 1)
         mean = powers @ self.coefficients
@@ -303,14 +332,39 @@ class ThermalCalibration:
 
     def outside_range(self, temperature) -> np.ndarray:
         """Where ``temperature`` lies outside the calibrated range (the polynomial is
-        extrapolated there)."""
+        extrapolated there).
+
+        Parameters
+        ----------
+        temperature : array_like
+            Temperatures, ``temperature_unit``.
+
+        Returns
+        -------
+        numpy.ndarray of bool
+            True where it is below or above the range the calibration's data covered.
+        """
         low, high = self.temperature_range
         temperature = np.asarray(temperature, dtype=float)
         return (temperature < low) | (temperature > high)
 
     def compensate(self, y, temperature) -> tuple[np.ndarray, np.ndarray]:
         """The channel ``y`` less its thermal bias (and the Earth rate, when the calibration
-        took it off), with the bias's posterior sd per sample."""
+        took it off), with the bias's posterior sd per sample.
+
+        Parameters
+        ----------
+        y : array_like
+            The channel's samples, the calibration's unit.
+        temperature : array_like
+            The temperature at each sample, ``temperature_unit``.
+
+        Returns
+        -------
+        compensated, sd : numpy.ndarray
+            The compensated samples and the sd of the bias taken off each, the channel's
+            unit.
+        """
         bias, sd = self.bias(temperature)
         earth = self.earth_rate["value"] if self.earth_rate else 0.0
         return np.asarray(y, dtype=float) - bias - earth, sd
@@ -334,7 +388,8 @@ class ThermalCalibration:
         ----------
         y, temperature : array_like
             The channel (its unit) and its temperature, on one sample grid; NaN marks a
-            missing sample.
+            missing sample. The Earth rate this calibration took off (if any) is taken off
+            ``y`` too.
         rate_hz : float
             Sample rate, Hz.
         periods : tuple of (start, stop), optional
@@ -345,8 +400,6 @@ class ThermalCalibration:
         drift : float, "auto" or None
             How far the bias may have moved since this calibration (channel unit, at T0):
             ``"auto"`` learns it, 0 or None assumes no change.
-
-        The Earth rate this calibration took off (if any) is taken off ``y`` too.
         seed : int
             Seed of the sampler.
 
@@ -432,7 +485,15 @@ class ThermalCalibration:
         )
 
     def to_document(self) -> dict:
-        """The calibration file's content (JSON-ready: arrays as lists)."""
+        """The calibration file's content (schema ``bayescal.thermal_calibration``, version 1).
+
+        Returns
+        -------
+        dict
+            Channel, units, T0, degree, coefficients with units and covariance, the range
+            covered, the noise model, the Earth rate taken off, the provenance of every step;
+            arrays as NumPy arrays, written as lists.
+        """
         document = {
             "schema": SCHEMA,
             "schema_version": SCHEMA_VERSION,
@@ -456,7 +517,18 @@ class ThermalCalibration:
         return to_jsonable(document)
 
     def save(self, path) -> Path:
-        """Write the calibration file (atomically: a failure leaves no partial file)."""
+        """Write the calibration file (atomically: a failure leaves no partial file).
+
+        Parameters
+        ----------
+        path : str or Path
+            The JSON file to write.
+
+        Returns
+        -------
+        Path
+            ``path``.
+        """
         path = Path(path)
         write_json(path, self.to_document())
         return path
@@ -466,7 +538,27 @@ class ThermalCalibration:
         """A calibration from its file's content, checked field by field against the schema
         (:func:`load_thermal_calibration`); a field that is missing, of the wrong type, not
         finite, of the wrong size, or a covariance that is not symmetric positive
-        semi-definite raises :class:`InputError` naming it."""
+        semi-definite raises :class:`InputError` naming it.
+
+        Parameters
+        ----------
+        document : dict
+            The file's content (:meth:`to_document`).
+        source : str
+            Where it comes from, named in messages.
+
+        Returns
+        -------
+        ThermalCalibration
+            The calibration (without the posterior it was made from).
+
+        Raises
+        ------
+        InputError
+            A field missing, of the wrong type, not finite or of the wrong size; another
+            schema or schema version; a covariance that is not symmetric positive
+            semi-definite.
+        """
         _check_document(document, source)
         return cls(
             channel=document["channel"],
@@ -824,6 +916,22 @@ def load_thermal_calibration(
     thermal fit``), checked field by field against its schema; with ``unit``, ``channel``
     and ``temperature_unit``, also that it was made for a channel of that name and unit and
     for temperatures in that unit.
+
+    Parameters
+    ----------
+    path : str or Path
+        The calibration file (JSON, schema ``bayescal.thermal_calibration``).
+    unit : str, optional
+        The unit of the channel it must have been made for.
+    channel : str, optional
+        The channel it must have been made for.
+    temperature_unit : str, optional
+        The temperature unit it must use.
+
+    Returns
+    -------
+    ThermalCalibration
+        The calibration, with ``origin`` the file.
 
     Raises
     ------

@@ -139,15 +139,24 @@ class TwoPositionCalibration:
     (draws of scale, offset and g_local, MAP with Laplace sd, the noise posterior)."""
 
     channel: str
+    """The channel's name."""
     unit: str
+    """The readings' unit: offsets are in it, the scale in m/s^2 per it."""
     rate_hz: float
+    """Sample rate, Hz."""
     up: Section
+    """The still section with the sensitive axis up."""
     down: Section
+    """The still section with the sensitive axis down."""
     gravity: LocalGravity
+    """The local gravity used, m/s^2, with its uncertainty and source."""
     confidence: float
+    """Confidence of the classical half-widths."""
     classical: dict
     """mean_up, mean_down, span, scale, offset, g_local: (value, half-width)."""
     bayesian: BayesianTwoPosition | None
+    """The posterior of scale, offset and g_local (draws, MAP with Laplace sd, the noise
+    model's posterior and fit checks); None with ``bayesian=False``."""
 
     @property
     def failures(self) -> tuple[str, ...]:
@@ -165,7 +174,19 @@ class TwoPositionCalibration:
         return not self.failures
 
     def check(self) -> "TwoPositionCalibration":
-        """Raise :class:`~bayescal.HealthCheckError` when the posterior failed its checks."""
+        """Raise :class:`~bayescal.HealthCheckError` when the posterior failed its checks.
+
+        Returns
+        -------
+        TwoPositionCalibration
+            This result, unchanged, when every check passed, so that the call chains
+            (``result = capability(...).check()``).
+
+        Raises
+        ------
+        HealthCheckError
+            A check failed; the message names each.
+        """
         if not self.passed:
             raise HealthCheckError(
                 "two-position: posterior checks failed: " + "; ".join(self.failures)

@@ -50,13 +50,15 @@ class DeviationResult(eqx.Module):
     """
 
     tau: np.ndarray
-    """Averaging times tau = m / rate, in seconds."""
+    """Averaging times tau = m / rate, s."""
     m: np.ndarray
     """Averaging factors (samples per average)."""
     deviation: np.ndarray
     """The deviation, in the unit of the rate signal."""
     ci_low: np.ndarray
+    """Lower end of the chi-square confidence interval of the deviation, its unit."""
     ci_high: np.ndarray
+    """Upper end of the chi-square confidence interval of the deviation, its unit."""
     n: np.ndarray
     """Number of terms in each estimate (Stable32's "#" column)."""
     edf: np.ndarray
@@ -64,7 +66,9 @@ class DeviationResult(eqx.Module):
     alpha: np.ndarray
     """Power-law exponent of S_y(f) used for the EDF (identified, or as given)."""
     confidence: float = eqx.field(static=True)
+    """Two-sided confidence of the interval."""
     estimator: str = eqx.field(static=True)
+    """Which deviation this is (overlapping Allan, modified Allan, Hadamard ...)."""
 
 
 @numba.njit(parallel=True, cache=True)
@@ -564,6 +568,29 @@ def allan_deviation(
         :func:`equivalent_degrees_of_freedom`) and exact chi-square quantiles; "stable32":
         Greenhall's phase-averaged EDF and Stable32's quantile approximation, to compare with
         Stable32's tables.
+
+    Returns
+    -------
+    DeviationResult
+        tau (s), the deviation (the unit of ``y``) and its interval, the number of terms,
+        the EDF and the noise exponent at each tau; arrays over tau last.
+
+    Raises
+    ------
+    InputError
+        Too few samples for the taus asked, a tau no estimate reaches, a confidence outside
+        (0, 1).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bayescal as bc
+    >>> y = np.random.default_rng(0).normal(0.0, 0.1, 100_000)  # white noise at 100 Hz, deg/s
+    >>> result = bc.allan_deviation(y, 100.0, taus=[0.1, 1.0])
+    >>> result.tau  # s
+    array([0.1, 1. ])
+    >>> result.deviation.round(4)  # N / sqrt(tau), N = 0.1 / sqrt(100 Hz) = 0.01 deg/s/√Hz
+    array([0.0315, 0.0102])
     """
     estimator = _ALLAN if overlapping else _ALLAN_NON_OVERLAPPING
     return _deviation(estimator, y, rate, taus, axis, kind, confidence, noise_type, ci_method)
@@ -580,7 +607,37 @@ def modified_allan_deviation(
     noise_type: int | Literal["auto"] = "auto",
     ci_method: str = "exact",
 ) -> DeviationResult:
-    """Modified Allan deviation (SP 1065 eq. 14); parameters as :func:`allan_deviation`."""
+    """Modified Allan deviation (SP 1065 eq. 14), with chi-square confidence intervals.
+
+    Parameters
+    ----------
+    y : array_like
+        Rate samples (``kind="phase"``: the integrated signal); NaN marks a missing sample.
+    rate : float
+        Sample rate, Hz.
+    taus : "octave", "decade", "all", int or array
+        Averaging times, s (as :func:`allan_deviation`).
+    axis : int
+        Axis of ``y`` along which time runs.
+    kind : "rate" or "phase"
+        What ``y`` holds.
+    confidence : float
+        Two-sided confidence of the interval.
+    noise_type : "auto" or int
+        Power-law exponent of S_y(f) for the EDF, or "auto" to identify it per tau.
+    ci_method : "exact" or "stable32"
+        As :func:`allan_deviation`.
+
+    Returns
+    -------
+    DeviationResult
+        The deviation (the unit of ``y``) and its interval at each tau.
+
+    Raises
+    ------
+    InputError
+        As :func:`allan_deviation`.
+    """
     return _deviation(_MODIFIED, y, rate, taus, axis, kind, confidence, noise_type, ci_method)
 
 
@@ -597,6 +654,38 @@ def hadamard_deviation(
     ci_method: str = "exact",
 ) -> DeviationResult:
     """Hadamard deviation (SP 1065 eq. 17, overlapping by default); insensitive to a linear
-    drift of the rate. Parameters as :func:`allan_deviation`."""
+    drift of the rate.
+
+    Parameters
+    ----------
+    y : array_like
+        Rate samples (``kind="phase"``: the integrated signal); NaN marks a missing sample.
+    rate : float
+        Sample rate, Hz.
+    taus : "octave", "decade", "all", int or array
+        Averaging times, s (as :func:`allan_deviation`).
+    axis : int
+        Axis of ``y`` along which time runs.
+    kind : "rate" or "phase"
+        What ``y`` holds.
+    overlapping : bool
+        The overlapping estimator (the default) or the non-overlapping one.
+    confidence : float
+        Two-sided confidence of the interval.
+    noise_type : "auto" or int
+        Power-law exponent of S_y(f) for the EDF, or "auto" to identify it per tau.
+    ci_method : "exact" or "stable32"
+        As :func:`allan_deviation`.
+
+    Returns
+    -------
+    DeviationResult
+        The deviation (the unit of ``y``) and its interval at each tau.
+
+    Raises
+    ------
+    InputError
+        As :func:`allan_deviation`.
+    """
     estimator = _HADAMARD if overlapping else _HADAMARD_NON_OVERLAPPING
     return _deviation(estimator, y, rate, taus, axis, kind, confidence, noise_type, ci_method)

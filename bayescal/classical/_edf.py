@@ -131,6 +131,40 @@ def equivalent_degrees_of_freedom(
     for IMU data, whose rate samples average the rate over the period: white rate noise then
     gives white samples, and the EDF equals that of the exact quadratic form (at m = 1 and
     N = 1001, 666 rather than the 782 of the averaged model).
+
+    Parameters
+    ----------
+    alpha : int
+        Power-law exponent of S_y(f) (2 white phase ... -2 random walk of frequency).
+    d : int
+        Difference order: 2 for the Allan variances, 3 for the Hadamard.
+    m : int
+        Averaging factor (tau = m / rate).
+    n_phase : int
+        Number of phase points (samples of the rate plus one).
+    overlapping : bool
+        Stride 1 (True) or m (False).
+    modified : bool
+        The modified variance (the phase averaged over m points first).
+    phase_averaged : bool
+        Phase samples as averages over their period (Stable32) rather than point samples.
+
+    Returns
+    -------
+    float
+        The equivalent degrees of freedom, dimensionless.
+
+    Raises
+    ------
+    ValueError
+        alpha + 2d <= 1 (the variance does not converge for that noise).
+
+    Examples
+    --------
+    >>> import bayescal as bc
+    >>> edf = bc.equivalent_degrees_of_freedom(0, 2, 1, 1001, overlapping=True, modified=False)
+    >>> round(edf)
+    666
     """
     alpha, d, m = int(alpha), int(d), int(m)
     if alpha + 2 * d <= 1:
@@ -265,6 +299,21 @@ def identify_noise_exponent(phase: np.ndarray, m: int, *, max_differences: int =
     while at least 30 decimated points remain, the B1 / R(n) ratios below that (as Stable32
     does); ``max_differences`` is 2 for Allan and modified Allan, 3 for Hadamard variances.
     The result is clipped to the exponents the estimator's EDF is defined for.
+
+    Parameters
+    ----------
+    phase : numpy.ndarray
+        The integrated signal of one lane (phase points; no missing samples).
+    m : int
+        Averaging factor.
+    max_differences : int
+        2 for Allan and modified Allan, 3 for Hadamard.
+
+    Returns
+    -------
+    int
+        alpha: 2 white phase, 1 flicker phase, 0 white rate (frequency), -1 flicker rate,
+        -2 random walk of rate (-3, -4 with three differences).
     """
     if (phase.size - 1) // m + 1 >= _LAG1_MIN_POINTS:
         alpha = _lag1_noise_exponent(phase, m, max_differences)
@@ -295,9 +344,34 @@ def _chi2_quantile_stable32(probability: float, edf: float) -> float:
 def deviation_interval(deviation, edf, confidence: float, method: str = "exact"):
     """Two-sided interval of a deviation with ``edf`` degrees of freedom (SP 1065 eq. 45).
 
-    ``method="exact"`` uses the chi-square quantiles; ``"stable32"`` reproduces Stable32's
-    approximation above 100 degrees of freedom (for comparison with its tables only).
-    Returns ``(low, high)`` arrays shaped like ``deviation``.
+    Parameters
+    ----------
+    deviation : array_like
+        The deviations (any unit).
+    edf : array_like
+        Their equivalent degrees of freedom (broadcast against ``deviation``).
+    confidence : float
+        Two-sided confidence, in (0, 1).
+    method : "exact" or "stable32"
+        ``"exact"`` uses the chi-square quantiles; ``"stable32"`` reproduces Stable32's
+        approximation above 100 degrees of freedom (for comparison with its tables only).
+
+    Returns
+    -------
+    low, high : numpy.ndarray
+        The interval's ends, shaped like ``deviation``, in its unit.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``method``.
+
+    Examples
+    --------
+    >>> import bayescal as bc
+    >>> low, high = bc.deviation_interval(0.01, 100.0, 0.95)
+    >>> round(float(low), 5), round(float(high), 5)
+    (0.00879, 0.01161)
     """
     deviation = np.asarray(deviation, dtype=float)
     edf = np.broadcast_to(np.asarray(edf, dtype=float), deviation.shape)

@@ -57,11 +57,29 @@ class LocalGravity:
         """A surveyed (or otherwise known) local gravity in m/s^2 with its one-sd
         uncertainty.
 
+        Parameters
+        ----------
+        value : float
+            Gravity, m/s^2.
+        uncertainty : float
+            One standard deviation, m/s^2 (0: taken as exact).
+
+        Returns
+        -------
+        LocalGravity
+            The value, its uncertainty, and a source that says it was given.
+
         Raises
         ------
         InputError
             The value is not a gravity on the Earth (9.7 to 9.9 m/s^2) or the uncertainty is
             negative.
+
+        Examples
+        --------
+        >>> import bayescal as bc
+        >>> bc.LocalGravity.measured(9.80123, 2e-5).source
+        'given: 9.80123 ± 2e-05 m/s^2'
         """
         low, high = PLAUSIBLE_GRAVITY
         if not low < value < high:
@@ -115,7 +133,7 @@ def local_gravity(latitude_deg: float, height_m: float = 0.0) -> LocalGravity:
     >>> import bayescal as bc
     >>> gravity = bc.local_gravity(40.1, 220.0)
     >>> round(gravity.value, 4), gravity.uncertainty
-    (9.8016, 0.0003)
+    (9.8011, 0.0003)
     """
     if not -90 <= latitude_deg <= 90:
         raise InputError(f"--latitude {latitude_deg} must lie between -90 and 90 degrees")

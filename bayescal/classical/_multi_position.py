@@ -91,9 +91,11 @@ class Poses:
     start_s: np.ndarray
     """(N,) seconds from the first sample of the file; NaN where unknown"""
     stop_s: np.ndarray
+    """(N,) seconds from the first sample of the file; NaN where unknown"""
 
     @property
     def n(self) -> int:
+        """The number of poses."""
         return int(self.count.size)
 
     @property
@@ -103,7 +105,39 @@ class Poses:
 
     @classmethod
     def from_samples(cls, samples, start_s=None, stop_s=None) -> "Poses":
-        """Poses from a list of (samples, 3) arrays of still readings (NaN: missing)."""
+        """Poses from a list of (samples, 3) arrays of still readings (NaN: missing).
+
+        Parameters
+        ----------
+        samples : list of array_like
+            One (samples, 3) array per pose, the three axes' readings in the raw unit.
+        start_s, stop_s : array_like, optional
+            Each pose's start and stop, s from the first sample of the file (default:
+            unknown, NaN).
+
+        Returns
+        -------
+        Poses
+            Each pose's mean, sample sd and count.
+
+        Raises
+        ------
+        InputError
+            A pose with fewer than two samples.
+        ValueError
+            An array that is not (samples, 3).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import bayescal as bc
+        >>> rng = np.random.default_rng(0)
+        >>> up = rng.normal([0.0, 0.0, 9.81], 0.01, (200, 3))
+        >>> down = rng.normal([0.0, 0.0, -9.81], 0.01, (200, 3))
+        >>> poses = bc.Poses.from_samples([up, down])
+        >>> poses.n, poses.mean[:, 2].round(2).tolist()
+        (2, [9.81, -9.81])
+        """
         blocks = [np.asarray(block, dtype=float) for block in samples]
         for block in blocks:
             if block.ndim != 2 or block.shape[1] != 3:

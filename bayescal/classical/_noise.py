@@ -60,14 +60,23 @@ _SLOPE_LINES = {"Q": (-1.0, math.sqrt(3.0)), "N": (-0.5, 1.0), "K": (0.5, 1.0 / 
 
 
 class SlopeReading(eqx.Module):
-    """A noise parameter read off the Allan deviation (IEEE 952 Annex C)."""
+    """A noise parameter read off the Allan deviation (IEEE 952 Annex C).
+
+    N is read on the -1/2 line at tau = 1 s, K on the +1/2 line at tau = 3 s, B from the flat
+    floor / 0.664, Q on the -1 line at tau = sqrt(3) s; each in the parameter's unit (N in
+    unit/√Hz, B in unit, K in unit·√Hz, Q in unit·s, for a channel in unit).
+    """
 
     value: float
+    """The reading (for an upper bound: the curve's own value there)."""
     ci_low: float
+    """Lower end of its interval (0 for an upper bound)."""
     ci_high: float
+    """Upper end of its interval (for an upper bound: the bound)."""
     tau_s: float
     """Averaging time where it was read (for an upper bound: where the bound is tightest)."""
     local_slope: float
+    """The Allan curve's slope (d log sigma / d log tau) where it was read."""
     kind: str = eqx.field(static=True)
     """"reading" on a stretch of the term's slope, or "upper_bound" where there is none."""
     reason: str = eqx.field(static=True, default="")
@@ -75,6 +84,10 @@ class SlopeReading(eqx.Module):
 
 
 class TIntervalCheck(eqx.Module):
+    """Whether the Student-t interval of the mean holds: the batch-means ratio
+    ADEV(tau)·sqrt(m)/s at the longest octave tau with at least 8 batches, with its
+    interval; the t-interval is invalid when that whole interval lies above 1."""
+
     valid: bool
     widening: float
     """Factor to widen the t-interval by (1.0 when it is valid)."""
@@ -85,6 +98,33 @@ class TIntervalCheck(eqx.Module):
 
 
 class ClassicalNoise(eqx.Module):
+    """The classical noise summary of one static channel (:func:`classical_noise`), in the
+    channel's unit U.
+
+    Attributes
+    ----------
+    n_samples : int
+        Samples present (missing ones not counted).
+    rate_hz : float
+        Sample rate, Hz.
+    duration_s : float
+        Length of the record, s.
+    bias : float
+        The sample mean, U.
+    bias_ci_low, bias_ci_high : float
+        Its Student-t interval at ``confidence``, U (valid only when ``t_interval.valid``).
+    std : float
+        The sample standard deviation, U.
+    confidence : float
+        Confidence of the intervals.
+    allan : DeviationResult
+        The overlapping Allan deviation with chi-square intervals.
+    t_interval : TIntervalCheck
+        Whether the Student-t interval holds, and the factor to widen it by when not.
+    slope_readings : dict
+        ``N``, ``B``, ``K``, ``Q`` -> :class:`SlopeReading` (IEEE Std 952).
+    """
+
     n_samples: int
     rate_hz: float
     duration_s: float
@@ -99,8 +139,31 @@ class ClassicalNoise(eqx.Module):
 
 
 def student_t_interval(values, confidence: float) -> tuple[float, float, float]:
-    """Mean and its two-sided Student-t interval, ignoring NaN (../shared/DESIGN.md);
-    ``values`` an array or a spooled series."""
+    """Mean and its two-sided Student-t interval, ignoring NaN (../shared/DESIGN.md).
+
+    The interval assumes independent samples; :func:`classical_noise` says whether a record
+    allows that (``t_interval``).
+
+    Parameters
+    ----------
+    values : numpy.ndarray or SpooledSeries
+        The samples; NaN marks a missing one.
+    confidence : float
+        Two-sided confidence, in (0, 1).
+
+    Returns
+    -------
+    mean, low, high : float
+        The sample mean and the interval's ends, in the samples' unit.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bayescal as bc
+    >>> mean, low, high = bc.student_t_interval(np.array([1.0, 2.0, 3.0, np.nan]), 0.95)
+    >>> mean, round(high - mean, 3)
+    (2.0, 2.484)
+    """
     n, mean, squares = finite_moments(values)
     return _t_interval(n, mean, math.sqrt(squares / (n - 1)), confidence)
 
@@ -220,7 +283,37 @@ def t_interval_check(allan: DeviationResult, std: float, n_samples: int) -> TInt
 
 
 def classical_noise(y, rate: float, *, confidence: float = 0.95, taus="octave") -> ClassicalNoise:
-    """Classical noise summary of one static channel ``y`` (NaN marks missing samples)."""
+    """Classical noise summary of one static channel: mean with its Student-t interval and
+    whether that holds, the Allan deviation, and the IEEE Std 952 slope readings.
+
+    Parameters
+    ----------
+    y : array_like or SpooledSeries
+        The samples, in the channel's unit; NaN marks a missing one. A spooled series (a long
+        channel, :func:`stream_channel`) is read in blocks.
+    rate : float
+        Sample rate, Hz.
+    confidence : float
+        Confidence of the intervals.
+    taus : "octave", "decade", "all", int or array
+        Averaging times of the Allan deviation (:func:`allan_deviation`).
+
+    Returns
+    -------
+    ClassicalNoise
+        The numbers, in the unit of ``y``.
+
+    Examples
+    --------
+    >>> import bayescal as bc
+    >>> y = bc.NoiseModel(rate_hz=100.0, bias=0.4, N=0.01).simulate(2**16, seed=0)
+    >>> noise = bc.classical_noise(y, 100.0)
+    >>> reading = noise.slope_readings["N"]
+    >>> reading.kind, round(reading.value, 3)  # deg/s/√Hz when y is in deg/s
+    ('reading', 0.01)
+    >>> bool(noise.t_interval.valid)
+    True
+    """
     values = y if is_spooled(y) else np.asarray(y, dtype=float)
     n, mean, squares = finite_moments(values)
     std = math.sqrt(squares / (n - 1)) if n > 1 else math.nan

@@ -27,9 +27,20 @@ MOVING_LIMIT = 8.0
 
 @dataclass(frozen=True)
 class Section:
+    """One still section of a two-position calibration (sensitive axis up, or down).
+
+    Attributes
+    ----------
+    values : numpy.ndarray
+        The channel's samples in the section, its unit; NaN marks a missing one.
+    start_s : float
+        Time of the first sample, seconds from the start of its file.
+    source : str
+        The file it comes from (named in messages).
+    """
+
     values: np.ndarray
     start_s: float
-    """Time of the first sample, seconds from the start of its file."""
     source: str
 
 

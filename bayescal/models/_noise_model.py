@@ -76,6 +76,9 @@ class NoiseModel(eqx.Module):
     """Bias plus the noise terms of a static channel; one object whose simulator, Allan
     variance, spectrum and likelihood share its parameters (in the channel's unit U).
 
+    A parameter of zero leaves its term out. Parameters may be JAX arrays (a batch of draws
+    broadcasts through :meth:`allan_variance` and :meth:`psd`).
+
     Parameters
     ----------
     rate_hz : float
@@ -100,9 +103,6 @@ class NoiseModel(eqx.Module):
     lsb : float
         The output's resolution, U: the samples are rounded to multiples of it (zero: not
         rounded).
-
-    A parameter of zero leaves its term out. Parameters may be JAX arrays (a batch of draws
-    broadcasts through :meth:`allan_variance` and :meth:`psd`).
 
     Examples
     --------
@@ -150,7 +150,14 @@ class NoiseModel(eqx.Module):
     def increment_weights(self):
         """Weights of the spectral components of the increments
         (:func:`~bayescal.models._components.component_weights`), the rounding's floor on the
-        white one."""
+        white one.
+
+        Returns
+        -------
+        jax.Array
+            One weight per spectral component of the increments, U^2 (the component's
+            variance per sample).
+        """
         weights = component_weights(self.N, self.B, self.K, self.Q, self.F)
         return weights.at[..., 0].add(self.rounding_variance / self.rate_hz)
 
@@ -158,7 +165,20 @@ class NoiseModel(eqx.Module):
         """(variances, filtered) for :func:`~bayescal.models._whittle.whittle_log_likelihood`
         at nodes ``nu`` (cycles per sample): without a low-pass, :meth:`increment_weights` and
         None; with one, the weights the filter does not shape and (|H|^2 at ``nu``, the
-        weights of the white noise's two components it shapes)."""
+        weights of the white noise's two components it shapes).
+
+        Parameters
+        ----------
+        nu : array_like
+            Frequencies, cycles per sample (0 < nu <= 1/2).
+
+        Returns
+        -------
+        variances : jax.Array
+            The weights the low-pass does not shape, U^2.
+        filtered : tuple of jax.Array or None
+            None without a low-pass; else (|H|^2 at ``nu``, the white noise's two weights).
+        """
         weights = self.increment_weights()
         if self.lowpass is None:
             return weights, None
@@ -169,7 +189,18 @@ class NoiseModel(eqx.Module):
     def increment_autocovariance(self, lags) -> np.ndarray:
         """Autocovariance of the increments y_{k+1} - y_k at integer ``lags``, U^2: each
         component's closed form, and the low-pass's change to the white noise's by numerical
-        integration of its spectrum (8192 midpoints on (0, 1/2))."""
+        integration of its spectrum (8192 midpoints on (0, 1/2)).
+
+        Parameters
+        ----------
+        lags : array_like of int
+            Lags, samples (0 is the variance).
+
+        Returns
+        -------
+        numpy.ndarray
+            The autocovariance at each lag, U^2.
+        """
         lags = np.asarray(lags, dtype=float)
         weights = np.asarray(self.increment_weights())
         covariance = sum(
@@ -191,7 +222,26 @@ class NoiseModel(eqx.Module):
     def allan_variance(self, tau):
         """Allan variance at averaging times ``tau`` (s), U^2: the sum of each term's (the
         DESIGN.md table, exact for period-averaged samples), the white noise's through the
-        low-pass when there is one, and the rounding's, LSB^2 / (12 fs tau)."""
+        low-pass when there is one, and the rounding's, LSB^2 / (12 fs tau).
+
+        Parameters
+        ----------
+        tau : array_like
+            Averaging times, s (exact at multiples of the sample period).
+
+        Returns
+        -------
+        jax.Array
+            The Allan variance at each tau, U^2 (its square root is the Allan deviation).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import bayescal as bc
+        >>> model = bc.NoiseModel(rate_hz=100.0, N=0.01, K=1e-4)
+        >>> np.sqrt(model.allan_variance(np.array([1.0, 3.0]))).round(5)  # ADEV, U
+        array([0.01   , 0.00577])
+        """
         tau = jnp.asarray(tau, dtype=float)
         white = (
             White.allan_variance(tau, self.N)
@@ -213,7 +263,24 @@ class NoiseModel(eqx.Module):
         U^2/Hz: white noise reads N^2. The increments' spectrum divided by the differencing
         filter's gain |1 - e^{-2 pi i f / fs}|^2 = 4 sin^2(pi f / fs), per Hz; the rate random
         walk and flicker diverge at zero frequency, the ramp (deterministic) is left out. The
-        low-pass multiplies the white noise's; the rounding adds LSB^2 / (12 fs)."""
+        low-pass multiplies the white noise's; the rounding adds LSB^2 / (12 fs).
+
+        Parameters
+        ----------
+        f : array_like
+            Frequencies, Hz (0 < f <= rate_hz / 2).
+
+        Returns
+        -------
+        jax.Array
+            The density at each frequency, U^2/Hz.
+
+        Examples
+        --------
+        >>> import bayescal as bc
+        >>> float(bc.NoiseModel(rate_hz=100.0, N=0.01).psd(10.0))  # N^2
+        0.0001
+        """
         nu = jnp.asarray(f, dtype=float) / self.rate_hz
         weights = component_weights(self.N, self.B, self.K, self.Q, self.F)
         shapes = jnp.stack([term.spectrum(nu, self.rate_hz) for term in SPECTRAL_TERMS], -1)
@@ -228,7 +295,20 @@ class NoiseModel(eqx.Module):
 
     def sample(self, key: jax.Array, n: int) -> jax.Array:
         """``n`` samples of the channel as a JAX array (traceable: ``jax.vmap`` over keys
-        gives many records); :meth:`simulate` is the NumPy form."""
+        gives many records); :meth:`simulate` is the NumPy form.
+
+        Parameters
+        ----------
+        key : jax.Array
+            A JAX PRNG key.
+        n : int
+            Number of samples.
+
+        Returns
+        -------
+        jax.Array
+            The samples, U, each the average rate over its period, starting at t = 0.
+        """
         # The order of the draws is fixed: the same key gives the same record in every
         # release.
         white_key, walk_key, bridge_key, flicker_key, quant_key = jax.random.split(key, 5)
@@ -273,7 +353,27 @@ class NoiseModel(eqx.Module):
         bayescal uses, :mod:`bayescal.models._whittle`; the low-pass and the rounding as in
         :meth:`psd`), plus the exact Gaussian log density
         of its level — the generalised-least-squares estimate of the turn-on bias from block
-        means given the noise (:mod:`bayescal.models._level`) — at :attr:`bias`."""
+        means given the noise (:mod:`bayescal.models._level`) — at :attr:`bias`.
+
+        Parameters
+        ----------
+        y : array_like
+            The record, U, sampled at ``rate_hz``; NaN marks a missing sample.
+
+        Returns
+        -------
+        float
+            The log-likelihood, nats.
+
+        Examples
+        --------
+        >>> import bayescal as bc
+        >>> truth = bc.NoiseModel(rate_hz=100.0, bias=0.4, N=0.004)
+        >>> y = truth.simulate(2**14, seed=1)
+        >>> other = bc.NoiseModel(rate_hz=100.0, bias=0.4, N=0.005)
+        >>> bool(truth.log_likelihood(y) > other.log_likelihood(y))
+        True
+        """
         values = np.asarray(y, dtype=float)
         summary = spectral_summary(values, self.rate_hz)
         variances, filtered = self.whittle_weights(summary.node_frequency)

@@ -103,6 +103,13 @@ class FleetPopulation(eqx.Module):
         """The true parameters of a fleet: for each unit, its noise scales (shared by its
         runs) and the turn-on bias of each of its runs (``runs_per_unit[i]`` of them).
 
+        Parameters
+        ----------
+        runs_per_unit : sequence of int
+            How many runs (power-ups) each unit has.
+        seed : int
+            The same seed gives the same fleet.
+
         Returns
         -------
         list of dict

@@ -58,7 +58,10 @@ class Manifest:
     """A fleet's recordings, in manifest order (:func:`read_manifest`)."""
 
     source: str
+    """The manifest file."""
     rows: tuple[ManifestRow, ...]
+    """One per recording: its path (resolved against the manifest's folder), the unit it
+    belongs to, its run, and the rate and temperature the manifest gives, if any."""
 
     @property
     def units(self) -> tuple[str, ...]:

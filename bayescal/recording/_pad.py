@@ -26,6 +26,24 @@ MIN_PAD_S = 1.0
 
 @dataclass(frozen=True)
 class PadWindow:
+    """The quiet window on the launch pad before liftoff (:func:`find_pad_window`).
+
+    Attributes
+    ----------
+    start_s, stop_s : float
+        The window, s from the first sample of the file.
+    liftoff_s : float
+        Where the accelerometer magnitude left the pad scatter before liftoff, s.
+    pad_level_g : float
+        The accelerometer magnitude at rest on the pad (its median over the first second), g.
+    pad_scatter_g : float
+        Its robust sd over the first second, g.
+    accel_columns : tuple of str
+        The x, y, z accelerometer columns used.
+    notes : tuple of str
+        What was inferred (the accelerometer's unit from its magnitude, ...).
+    """
+
     start_s: float
     stop_s: float
     liftoff_s: float
@@ -49,7 +67,38 @@ def find_pad_window(
     time_unit: str | None = None,
     rate: float | None = None,
 ) -> PadWindow:
-    """Locate liftoff and the quiet window before it (seconds from the first sample)."""
+    """Locate liftoff and the quiet window before it (seconds from the first sample).
+
+    The magnitude of the accelerometer vector sits at 1 g on the pad; liftoff is the first
+    rise of more than 0.5 g held for 0.05 s, traced back to where the magnitude left the pad
+    scatter; the window is the longest stretch before it whose 0.25 s running mean stays at
+    the pad level and whose running scatter stays within three times its typical value.
+
+    Parameters
+    ----------
+    table : Recording
+        The flight log (:func:`load_recording`).
+    accel_columns : tuple of str, optional
+        The x, y, z accelerometer columns (default: found by name).
+    accel_unit : str, optional
+        Their unit (default: the header's, else g or m/s^2 recognised from the magnitude at
+        rest, with a note).
+    time_column, time_unit : str, optional
+        The time stamps' column and unit (default: ``time`` / ``t`` in seconds).
+    rate : float, optional
+        Sample rate, Hz: take the samples as evenly spaced, ignoring the time stamps.
+
+    Returns
+    -------
+    PadWindow
+        The window, the liftoff time and the pad level.
+
+    Raises
+    ------
+    InputError
+        No accelerometer columns, a log that does not start at rest, no liftoff, or less
+        than 1 s of quiet pad before it.
+    """
     columns = accel_columns or find_accelerometer_columns(table)
     if columns is None:
         raise InputError(

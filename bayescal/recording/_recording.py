@@ -79,7 +79,9 @@ class Recording:
     source: str
     """The file (and, for a ROS bag, the topic) the columns come from."""
     columns: dict[str, np.ndarray]
+    """The numeric columns: name -> values, as the file holds them (float64)."""
     header_units: dict[str, str]
+    """Column name -> the unit its header gives (``gyro_x[deg/s]``), for those that give one."""
     other_columns: tuple[str, ...] = ()
     """Columns that are not numeric (text), kept only to name them in messages."""
     topic: str | None = None
@@ -99,10 +101,30 @@ class Recording:
 
     @property
     def n_rows(self) -> int:
+        """The number of data rows (samples) of the columns."""
         return len(next(iter(self.columns.values()))) if self.columns else 0
 
     def require(self, name: str, role: str = "column") -> np.ndarray:
-        """The column ``name``, or an :class:`InputError` that lists the columns there are."""
+        """The column ``name``, or an error that lists the columns there are.
+
+        Parameters
+        ----------
+        name : str
+            The column's name.
+        role : str
+            What the column is for, as the message names it ("time column", ...).
+
+        Returns
+        -------
+        numpy.ndarray
+            The column's values, in the file's unit.
+
+        Raises
+        ------
+        InputError
+            No such column, or one that is not numeric or not usable (the reason and what
+            to do are in the message).
+        """
         if name in self.columns:
             return self.columns[name]
         if name in self.unusable:
@@ -138,13 +160,51 @@ class Recording:
         )
 
     def has(self, name: str) -> bool:
-        """Whether the file has a column ``name`` (numeric or not)."""
+        """Whether the file has a column ``name`` (numeric or not).
+
+        Parameters
+        ----------
+        name : str
+            The column's name.
+
+        Returns
+        -------
+        bool
+            True when the file has it, even as text or unusable.
+        """
         return name in self.columns or name in self.unusable or name in self.other_columns
 
     def channel(self, name: str, **options) -> "Channel":
-        """Column ``name`` checked and put on a regular sample grid; ``options`` are those of
-        :func:`prepare_channel` (unit, scale, rate, time_column, time_unit, start, stop, gaps,
-        temperature)."""
+        """Column ``name`` checked and put on a regular sample grid.
+
+        Parameters
+        ----------
+        name : str
+            The column's name.
+        **options
+            Those of ``bayescal.recording.prepare_channel``: ``unit`` (the channel's unit;
+            else the header's, else read from the name), ``scale`` (a factor, or a sensor
+            card's name, for raw counts), ``rate`` (Hz: ignore the time stamps),
+            ``time_column``, ``time_unit``, ``start`` and ``stop`` (seconds from the first
+            sample of the file), ``gaps`` ("error" or "split") and ``temperature`` (a column
+            to put on the same grid).
+
+        Returns
+        -------
+        Channel
+            The samples on their grid, with rate, unit and the notes of what was inferred.
+
+        Raises
+        ------
+        InputError
+            No such column, a gap (unless ``gaps="split"``), irregular sampling, a rail,
+            a glitch, too few samples ... each with what to do.
+
+        Examples
+        --------
+        >>> import bayescal as bc
+        >>> gyro = bc.load_recording("imu.csv").channel("gyro_x", unit="deg/s")  # doctest: +SKIP
+        """
         return prepare_channel(self, name, **options)
 
 
@@ -269,10 +329,12 @@ class Channel:
     channel: str
     """The column's name."""
     unit: str
+    """The samples' unit (deg/s, m/s^2, LSB ...)."""
     values: np.ndarray
     """Samples on the grid, in ``unit``; NaN where a sample is missing (only with
     gaps="split")."""
     rate_hz: float
+    """Sample rate, Hz."""
     start_s: float
     """Time of the first sample, from the first sample of the file."""
     temperature: np.ndarray | None = None
@@ -287,18 +349,22 @@ class Channel:
 
     @property
     def n_samples(self) -> int:
+        """The number of samples present (missing ones, NaN, not counted)."""
         return int(np.count_nonzero(~np.isnan(self.values)))
 
     @property
     def duration_s(self) -> float:
+        """The length of the grid, s (missing samples included)."""
         return self.values.size / self.rate_hz
 
     @property
     def stop_s(self) -> float:
+        """Time of the end of the grid, s from the first sample of the file."""
         return self.start_s + self.duration_s
 
     @property
     def time_s(self) -> np.ndarray:
+        """The time of each sample on the grid, s from the first sample of the file."""
         return self.start_s + np.arange(self.values.size) / self.rate_hz
 
 

@@ -23,6 +23,8 @@ MIN_DURATION_S = 2.0
 
 @dataclass(frozen=True)
 class StaticSection:
+    """One still stretch of a session (:func:`find_static_sections`), as sample indices."""
+
     start: int
     """first sample"""
     stop: int
@@ -42,7 +44,38 @@ def _running(values: np.ndarray, width: int):
 def find_static_sections(
     values: np.ndarray, rate_hz: float, *, min_duration_s: float = MIN_DURATION_S
 ) -> list[StaticSection]:
-    """Still stretches of a (samples, channels) array, in time order."""
+    """Still stretches of a (samples, channels) array, in time order.
+
+    A sample is still where the 0.25 s running scatter of every channel stays within three
+    times its still level and the running mean has not moved (see the module's notes); runs
+    shorter than ``min_duration_s`` are dropped and each run is trimmed by one window at
+    both ends.
+
+    Parameters
+    ----------
+    values : array_like
+        The samples, (samples,) or (samples, channels), any unit (counts welcome).
+    rate_hz : float
+        Sample rate, Hz.
+    min_duration_s : float
+        The shortest still stretch kept, s.
+
+    Returns
+    -------
+    list of StaticSection
+        The still stretches (empty when there is none), with each channel's mean.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bayescal as bc
+    >>> rng = np.random.default_rng(0)
+    >>> still = rng.normal(0.0, 0.01, 500)
+    >>> handled = rng.normal(0.0, 1.0, 200)
+    >>> session = np.concatenate([still, handled, still + 2.0])
+    >>> [(s.start, s.stop) for s in bc.find_static_sections(session, 100.0)]
+    [(25, 451), (725, 1176)]
+    """
     values = np.asarray(values, dtype=float)
     if values.ndim == 1:
         values = values[:, None]

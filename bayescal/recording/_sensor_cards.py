@@ -25,15 +25,50 @@ _WHITE_ENTRIES = ("noise_density", "angle_random_walk", "velocity_random_walk")
 
 @dataclass(frozen=True)
 class SensorCard:
+    """The datasheet figures of one IMU part (a TOML file in ``models/``; schema in
+    ``models/README.md``): its gyro and accelerometer noise, each number with its unit and
+    the place in the datasheet it comes from.
+
+    Attributes
+    ----------
+    name : str
+        The part's name (``MPU-6050``), as ``--sensor`` takes it.
+    path : Path
+        The card's file.
+    content : dict
+        The parsed TOML: ``[gyro]`` and ``[accelerometer]`` sections of entries
+        ``{value, unit, source}``.
+    """
+
     name: str
     path: Path
     content: dict
 
     @property
     def datasheet(self) -> str:
+        """The datasheet the figures come from (title and revision), or ""."""
         return self.content.get("datasheet", "")
 
     def section(self, unit: str) -> dict:
+        """The card's section for a channel of this unit: ``gyro`` for an angular rate,
+        ``accelerometer`` for an acceleration.
+
+        Parameters
+        ----------
+        unit : str
+            The channel's unit (deg/s, m/s^2 ...).
+
+        Returns
+        -------
+        dict
+            The section's entries, each ``{value, unit, source}``.
+
+        Raises
+        ------
+        InputError
+            The unit is neither an angular rate nor an acceleration, or the card has no
+            section for that kind of sensor.
+        """
         quantity = parse_unit(unit).quantity
         section = _SECTION_OF_QUANTITY.get(quantity)
         if section is None:
@@ -50,7 +85,27 @@ class SensorCard:
         return self.content[section]
 
     def datasheet_values(self, unit: str) -> dict[str, tuple[float, str]]:
-        """N, B and K from the card, in the channel's parameter units, each with its source."""
+        """N, B and K from the card, in the channel's parameter units, each with its source.
+
+        The datasheet's "in-run bias stability" is the minimum of the Allan deviation, so
+        B = that / 0.664 (IEEE Std 952) unless the card defines it otherwise.
+
+        Parameters
+        ----------
+        unit : str
+            The channel's unit; N is returned in unit/√Hz, B in unit, K in unit·√Hz.
+
+        Returns
+        -------
+        dict
+            Parameter name (``N``, ``B``, ``K``; those the card gives) -> (value, where in
+            the datasheet it comes from).
+
+        Raises
+        ------
+        InputError
+            As :meth:`section`.
+        """
         section = self.section(unit)
         values = {}
         for entry in _WHITE_ENTRIES:
@@ -78,6 +133,26 @@ def models_folder() -> Path:
 
 
 def sensor_cards() -> list[SensorCard]:
+    """The sensor cards there are (``bayescal sensors`` lists them).
+
+    Read from ``models/`` beside the package, or from the folder ``BAYESCAL_MODELS`` names.
+
+    Returns
+    -------
+    list of SensorCard
+        Every card, in the order of their file names.
+
+    Raises
+    ------
+    InputError
+        A card that is not valid TOML, or of another schema version.
+
+    Examples
+    --------
+    >>> import bayescal as bc
+    >>> "MPU-6050" in [card.name for card in bc.sensor_cards()]
+    True
+    """
     cards = []
     for path in sorted(models_folder().glob("*.toml")):
         try:
@@ -95,6 +170,30 @@ def sensor_cards() -> list[SensorCard]:
 
 
 def find_card(name: str) -> SensorCard:
+    """The sensor card of a part, by name (case, ``_`` and ``-`` do not matter) or file stem.
+
+    Parameters
+    ----------
+    name : str
+        The part, as ``--sensor`` takes it (``MPU-6050``, ``adis16405``).
+
+    Returns
+    -------
+    SensorCard
+        Its card.
+
+    Raises
+    ------
+    InputError
+        No card of that name (the message lists those there are).
+
+    Examples
+    --------
+    >>> import bayescal as bc
+    >>> card = bc.find_card("mpu_6050")
+    >>> card.name, sorted(card.datasheet_values("deg/s"))
+    ('MPU-6050', ['N'])
+    """
     wanted = name.strip().lower().replace("_", "-")
     cards = sensor_cards()
     for card in cards:

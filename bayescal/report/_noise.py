@@ -195,10 +195,10 @@ def _normal_quantile(confidence: float) -> float:
 def noise_result(
     data, classical: ClassicalNoise, window: dict, noise: "NoiseFit | None" = None
 ) -> dict:
-    """The JSON document of ``bayescal noise`` (contract in the README). ``data`` names the
-    channel: its ``source``, ``channel``, ``unit`` and ``notes`` (a Channel or a NoiseFit);
-    ``noise`` is the Bayesian fit, with its checks against the record and how its terms were
-    chosen."""
+    """The JSON document of ``bayescal noise`` (contract in docs/guide/outputs.md). ``data``
+    names the channel: its ``source``, ``channel``, ``unit`` and ``notes`` (a Channel or a
+    NoiseFit); ``noise`` is the Bayesian fit, with its checks against the record and how its
+    terms were chosen."""
     unit = data.unit
     allan = classical.allan
     half_width = (classical.bias_ci_high - classical.bias_ci_low) / 2

@@ -182,7 +182,7 @@ def test_a_gap_between_blocks_is_refused_by_row_as_in_memory(small_blocks, tmp_p
     time = np.arange(values.size) / RATE
     time[8192:] += 5.0  # 5 s of nothing at the start of the second block
     write_table(path, values, time)
-    with pytest.raises(bc.InputError, match="gap of 5.01 s") as error:
+    with pytest.raises(bc.InputError, match=r"gap of 5\.01 s") as error:
         stream_channel(path, "gyro_x")
     assert "data row 8193" in str(error.value) and "--gaps split" in error.value.fix
 

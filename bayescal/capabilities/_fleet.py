@@ -165,11 +165,15 @@ def fit_recording(task: RecordingTask) -> RecordingDraws | RecordingFailure:
     """One Dask task: load a recording, fit its channel's noise, keep what the population
     needs; a recording that cannot be used comes back as a :class:`RecordingFailure`."""
     from ..recording._recording import load_recording
+    from ..recording._stream import is_long_recording, stream_channel
     from ._noise import fit_noise
 
     started = time.perf_counter()
     try:
-        channel = load_recording(task.path).channel(task.channel, **task.grid)
+        if is_long_recording(task.path):  # a worker's memory bounded by a block, as noise's
+            channel = stream_channel(task.path, task.channel, **task.grid)
+        else:
+            channel = load_recording(task.path).channel(task.channel, **task.grid)
         fit = fit_noise(
             channel,
             terms=task.terms,

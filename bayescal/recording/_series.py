@@ -68,10 +68,12 @@ class SpooledSeries:
 
     @property
     def shape(self) -> tuple[int]:
+        """``(size,)``: a series is one-dimensional."""
         return (self.size,)
 
     @property
     def ndim(self) -> int:
+        """1: a series is one-dimensional."""
         return 1
 
     def __len__(self) -> int:

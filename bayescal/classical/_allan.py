@@ -394,18 +394,10 @@ def _side_by_side(series, first: int, count: int, offsets) -> np.ndarray:
     return np.concatenate([read(series, first + o, first + o + count) for o in offsets])
 
 
-def _lane_exponents(phase_of, size, factors, max_differences):
-    """The noise exponent at each factor from the phase of the longest complete run, read
-    decimated (``phase_of(step)``: its every step-th sample, at most what the lag-1 method
-    reads)."""
-    exponents = []
-    for m in factors.tolist():
-        if size > 2 * m:
-            decimated = phase_of(m)
-            exponents.append(identify_noise_exponent(decimated, 1, max_differences=max_differences))
-        else:
-            exponents.append(0)
-    return exponents
+def _lane_exponents(exponent_at, size: int, factors) -> list[int]:
+    """The noise exponent at each factor (``exponent_at(m)``) where the longest complete run
+    (``size`` phase points) holds more than two averages; 0 where it does not."""
+    return [exponent_at(m) if size > 2 * m else 0 for m in factors.tolist()]
 
 
 def _spooled_lanes(estimator, y, rate, taus, noise_type, max_differences):
@@ -429,12 +421,18 @@ def _spooled_lanes(estimator, y, rate, taus, noise_type, max_differences):
         runs = gap_free_runs(y)
         start, stop = runs[np.argmax(runs[:, 1] - runs[:, 0])]
         size = stop - start + 1  # phase points of the run
+        # The run's phase read decimated, as much of it as the lag-1 method reads: the same
+        # points the in-memory path uses. Only below 30 averages, where the R(n) ratio of
+        # phase noise would need the undecimated phase, is it taken on the decimated one.
         exponents = [
             _lane_exponents(
-                lambda m: read(phase, start, start + min(size, m * _LAG1_MAX_POINTS), m),
+                lambda m: identify_noise_exponent(
+                    read(phase, start, start + min(size, m * _LAG1_MAX_POINTS), m),
+                    1,
+                    max_differences=max_differences,
+                ),
                 size,
                 factors,
-                max_differences,
             )
         ]
     return factors, sums, counts, exponents
@@ -462,10 +460,11 @@ def _memory_lanes(estimator, lanes, rate, taus, kind, noise_type, max_difference
             complete = _longest_complete_run(phase[lane], missing[lane])
             exponents.append(
                 _lane_exponents(
-                    lambda m, complete=complete: complete[::m][:_LAG1_MAX_POINTS],
+                    lambda m, complete=complete: identify_noise_exponent(
+                        complete, m, max_differences=max_differences
+                    ),
                     complete.size,
                     factors,
-                    max_differences,
                 )
             )
     return factors, sums, counts, exponents

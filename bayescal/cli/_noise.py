@@ -111,6 +111,15 @@ def add_parser(commands) -> None:
     parser.set_defaults(run=run)
 
 
+def _require_channel(args) -> None:
+    if not args.channel:
+        raise InputError(
+            "--channel is required",
+            source=args.file,
+            fix="name the column to analyse, e.g. --channel gyro_x",
+        )
+
+
 def _recording(args):
     if args.example:
         if args.file:
@@ -120,12 +129,7 @@ def _recording(args):
         return example_recording(args.seed), args.channel or "gyro_x"
     if not args.file:
         raise InputError("no recording given", fix="pass a FILE, or --example to try bayescal")
-    if not args.channel:
-        raise InputError(
-            "--channel is required",
-            source=args.file,
-            fix="name the column to analyse, e.g. --channel gyro_x",
-        )
+    _require_channel(args)
     return load(args), args.channel
 
 
@@ -157,12 +161,7 @@ def _streamed_channel(args):
     """The channel of a long recording, spooled to disk, and its window's description."""
     from ..recording._stream import stream_channel
 
-    if not args.channel:
-        raise InputError(
-            "--channel is required",
-            source=args.file,
-            fix="name the column to analyse, e.g. --channel gyro_x",
-        )
+    _require_channel(args)
     for given, argument in ((args.topic, "--topic"), (args.names, "--names")):
         if given:
             raise InputError(

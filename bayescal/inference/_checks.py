@@ -61,12 +61,14 @@ def dominant_exponent(noise: dict, tau, gauss_markov_s: float = 0.0) -> list[int
     return exponents[np.argmax(values, axis=0)].tolist()
 
 
-def allan_check(residual, rate_hz: float, unit: str, model_variance, exponents) -> dict:
+def allan_check(residual, rate_hz: float, unit: str, model_variance, exponents, allan=None) -> dict:
     """The measured overlapping Allan deviation of ``residual`` against the model's band:
     ``model_variance(tau)`` its Allan variance, ``exponents(tau)`` the noise type it says
     dominates at each tau. The band is the model's: its EDF for that noise type, not for a type
-    identified from the data (unreliable from a few long averages)."""
-    allan = allan_deviation(residual, rate_hz, "octave")
+    identified from the data (unreliable from a few long averages). ``allan``: that deviation
+    at octave taus when already computed (a long record's costs a pass over it)."""
+    if allan is None:
+        allan = allan_deviation(residual, rate_hz, "octave")
     usable = np.isfinite(allan.deviation)
     tau, deviation = allan.tau[usable], allan.deviation[usable]
     predicted = model_variance(tau)
@@ -414,7 +416,7 @@ def lag_one_check(values, autocovariance: np.ndarray) -> dict:
     }
 
 
-def noise_model_checks(model, summary, values, unit: str) -> list[dict]:
+def noise_model_checks(model, summary, values, unit: str, allan=None) -> list[dict]:
     """The checks of a fitted stationary noise model (a :class:`~bayescal.NoiseModel` at the
     posterior's MAP) against its record: the Allan deviation within the model's predictive
     band, the spectrum in octave bands, the increments' lag-1 autocorrelation. Each says where
@@ -435,6 +437,7 @@ def noise_model_checks(model, summary, values, unit: str) -> list[dict]:
             unit,
             lambda tau: np.asarray(model.allan_variance(tau)),
             lambda tau: dominant_exponent(noise, tau),
+            allan,
         ),
         spectrum_check(summary, ratio, expected),
         lag_one_check(values, autocovariance),
@@ -446,10 +449,13 @@ def noise_model_checks(model, summary, values, unit: str) -> list[dict]:
     return checks
 
 
-def posterior_checks(posterior, values, unit: str) -> list[dict]:
+def posterior_checks(posterior, values, unit: str, allan=None) -> list[dict]:
     """:func:`noise_model_checks` of a noise posterior (:class:`NoisePosterior`) at its MAP,
-    against the values it was fitted to."""
-    return noise_model_checks(posterior.model_at_map(), posterior.problem.spectral, values, unit)
+    against the values it was fitted to (``allan``: their Allan deviation at octave taus,
+    when already computed)."""
+    return noise_model_checks(
+        posterior.model_at_map(), posterior.problem.spectral, values, unit, allan
+    )
 
 
 def _material(check: dict) -> str:

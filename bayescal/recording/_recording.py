@@ -563,6 +563,18 @@ def _slope(index: np.ndarray, time: np.ndarray) -> float:
     return float(np.sum(centred * (time - time.mean())) / np.sum(centred * centred))
 
 
+def gap_error(step: float, periods: float, where: str, source, column) -> InputError:
+    """The refusal of a gap in the time stamps (``--gaps error``): how long, where, and what
+    to do."""
+    return InputError(
+        f"gap of {step:.6g} s ({periods:.1f} sample periods) at {where}",
+        source=source,
+        column=column,
+        fix="pass --gaps split to analyse the segments without bridging the gaps, or pick a "
+        "window with --start/--stop",
+    )
+
+
 def _grid_positions(relative_time, window, place: _Place, source, column, gaps, raw_time):
     """Sample-grid index of each sample in ``window`` and the sample rate, from the time
     stamps; checks gaps and jitter. The period is refitted (least squares of time against
@@ -608,13 +620,12 @@ def _grid_positions(relative_time, window, place: _Place, source, column, gaps, 
     if gap_index.size and gaps == "error":
         first = int(gap_index[0])
         step = time[first + 1] - time[first]
-        raise InputError(
-            f"gap of {step:.6g} s ({step / period:.1f} sample periods) at "
+        raise gap_error(
+            step,
+            step / period,
             f"{place(window.start + first + 1)}; {gap_index.size} gap(s) in all",
-            source=source,
-            column=column,
-            fix="pass --gaps split to analyse the segments without bridging the gaps, or pick a "
-            "window with --start/--stop",
+            source,
+            column,
         )
     if gap_index.size:
         notes.append(

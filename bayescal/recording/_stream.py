@@ -31,6 +31,7 @@ from ._recording import (
     _time_in_seconds,
     _without_placeholder,
     find_time_column,
+    gap_error,
     prepare_channel,
 )
 from ._series import BLOCK, SpoolWriter
@@ -201,14 +202,8 @@ class _Joiner:
             )
         skipped = max(0, round(periods) - 1)
         if periods > _GAP_PERIODS and self.gaps == "error":
-            raise InputError(
-                f"gap of {step:.6g} s ({periods:.1f} sample periods) at data row {row} "
-                f"(t = {first_time - self.first_time:.6g} s)",
-                source=self.source,
-                column=self.time_name,
-                fix="pass --gaps split to analyse the segments without bridging the gaps, or "
-                "pick a window with --start/--stop",
-            )
+            where = f"data row {row} (t = {first_time - self.first_time:.6g} s)"
+            raise gap_error(step, periods, where, self.source, self.time_name)
         if skipped:
             self.writer.fill(skipped)
             self.notes.append(f"{skipped} sample(s) missing at data row {row}: left as a gap")
@@ -271,11 +266,13 @@ def stream_channel(
             fix="load it with bc.load_recording, or convert it to Parquet",
         )
     options = {"unit": unit, "scale": scale, "time_column": time_column, "time_unit": time_unit}
-    head = next(_row_blocks(path, source, None, skip_rows))
-    head = _without_placeholder(head)
+    first_batch = next(iter(_batches(path, source, None, skip_rows)), None)
+    if first_batch is None or first_batch.num_rows == 0:
+        raise InputError("the file holds no data rows", source=source)
+    head = _recording([first_batch], source, 0)
     head.require(channel, "channel")
     time_name = None if rate is not None else find_time_column(head, time_column)
-    wanted = _raw_names(path, source, skip_rows, {channel, time_name} - {None})
+    wanted = _raw_names(first_batch.schema.names, {channel, time_name} - {None})
     writer = SpoolWriter(name=channel.replace("/", "_"))
     joiner = _Joiner(writer, gaps, source, time_name)
     bar = _progress_bar(path, progress)
@@ -359,11 +356,10 @@ def _progress_bar(path: Path, shown: bool):
     return tqdm(total=total, desc="reading", unit="row", unit_scale=True, file=sys.stderr)
 
 
-def _raw_names(path: Path, source: str, skip_rows: int, names: set[str]) -> list[str]:
+def _raw_names(headers, names: set[str]) -> list[str]:
     """The file's own header names (units and all) of the columns ``names``."""
     from ._readers import split_header
 
-    first = next(iter(_batches(path, source, None, skip_rows)))
-    headers = [str(name) for name in first.schema.names]
+    headers = [str(name) for name in headers]
     split, _ = split_header(headers)
     return [header for header, name in zip(headers, split, strict=True) if name in names]

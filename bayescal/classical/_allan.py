@@ -19,9 +19,9 @@ samples: terms that would span one are left out (the gap-tolerant estimator), wh
 
 import functools
 import math
+from dataclasses import dataclass
 from typing import Literal
 
-import equinox as eqx
 import numba
 import numpy as np
 
@@ -43,7 +43,8 @@ from ._edf import (
 TauSpec = Literal["octave", "decade", "all"] | int | np.ndarray | list
 
 
-class DeviationResult(eqx.Module):
+@dataclass(frozen=True)
+class DeviationResult:
     """An Allan-family deviation at each averaging time, with its confidence interval.
 
     Arrays over averaging times are last; leading axes are those of the input less ``axis``.
@@ -65,9 +66,9 @@ class DeviationResult(eqx.Module):
     """Equivalent degrees of freedom (Greenhall & Riley 2003)."""
     alpha: np.ndarray
     """Power-law exponent of S_y(f) used for the EDF (identified, or as given)."""
-    confidence: float = eqx.field(static=True)
+    confidence: float
     """Two-sided confidence of the interval."""
-    estimator: str = eqx.field(static=True)
+    estimator: str
     """Which deviation this is (overlapping Allan, modified Allan, Hadamard ...)."""
 
 
@@ -141,7 +142,8 @@ def _modified_sums(phase, missing, factors):  # pragma: no cover - compiled
     return sums, counts
 
 
-class _Estimator(eqx.Module):
+@dataclass(frozen=True)
+class _Estimator:
     name: str
     order: int
     overlapping: bool

@@ -25,10 +25,10 @@
 """
 
 import math
+from dataclasses import dataclass
 
-import equinox as eqx
 import numpy as np
-from scipy import stats
+from scipy import special
 
 from ..recording._series import finite_moments, is_spooled, series_size
 from ..recording._units import BIAS_INSTABILITY_FACTOR
@@ -59,7 +59,8 @@ _MATERIAL_EXCESS = 0.10
 _SLOPE_LINES = {"Q": (-1.0, math.sqrt(3.0)), "N": (-0.5, 1.0), "K": (0.5, 1.0 / math.sqrt(3.0))}
 
 
-class SlopeReading(eqx.Module):
+@dataclass(frozen=True)
+class SlopeReading:
     """A noise parameter read off the Allan deviation (IEEE 952 Annex C).
 
     N is read on the -1/2 line at tau = 1 s, K on the +1/2 line at tau = 3 s, B from the flat
@@ -77,13 +78,14 @@ class SlopeReading(eqx.Module):
     """Averaging time where it was read (for an upper bound: where the bound is tightest)."""
     local_slope: float
     """The Allan curve's slope (d log sigma / d log tau) where it was read."""
-    kind: str = eqx.field(static=True)
+    kind: str
     """"reading" on a stretch of the term's slope, or "upper_bound" where there is none."""
-    reason: str = eqx.field(static=True, default="")
+    reason: str = ""
     """Why an upper bound replaced the reading (empty for a reading)."""
 
 
-class TIntervalCheck(eqx.Module):
+@dataclass(frozen=True)
+class TIntervalCheck:
     """Whether the Student-t interval of the mean holds: the batch-means ratio
     ADEV(tau)·sqrt(m)/s at the longest octave tau with at least 8 batches, with its
     interval; the t-interval is invalid when that whole interval lies above 1."""
@@ -97,7 +99,8 @@ class TIntervalCheck(eqx.Module):
     tau_s: float
 
 
-class ClassicalNoise(eqx.Module):
+@dataclass(frozen=True)
+class ClassicalNoise:
     """The classical noise summary of one static channel (:func:`classical_noise`), in the
     channel's unit U.
 
@@ -169,7 +172,7 @@ def student_t_interval(values, confidence: float) -> tuple[float, float, float]:
 
 
 def _t_interval(n: int, mean: float, std: float, confidence: float) -> tuple[float, float, float]:
-    half = float(stats.t.ppf(0.5 + confidence / 2, n - 1) * std / math.sqrt(n))
+    half = float(special.stdtrit(n - 1, 0.5 + confidence / 2) * std / math.sqrt(n))
     return mean, mean - half, mean + half
 
 

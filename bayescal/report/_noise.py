@@ -6,9 +6,8 @@ from importlib.metadata import version
 from typing import TYPE_CHECKING
 
 from ..classical._noise import ClassicalNoise, SlopeReading
-from ..models._noise_model import parameter_unit
 from ..models._terms import FILTER_SHAPE_OF_TERM, TERM_OF_PARAMETER
-from ..recording._units import display_values
+from ..recording._units import display_values, noise_parameter_unit
 
 if TYPE_CHECKING:  # the Bayesian modules load only for a Bayesian result (--classical-only)
     from ..capabilities._noise import NoiseFit
@@ -43,7 +42,7 @@ def _read_at(parameter: str, reading: SlopeReading) -> str:
 
 
 def _reading(parameter: str, reading: SlopeReading, unit: str) -> dict:
-    unit_of_parameter = parameter_unit(parameter, unit)
+    unit_of_parameter = noise_parameter_unit(parameter, unit)
     return {
         "value": reading.value,
         "ci_low": reading.ci_low,
@@ -81,6 +80,7 @@ def _t_interval_explanation(classical: ClassicalNoise) -> str:
 
 def _bayesian_block(fit: "NoisePosterior", unit: str) -> dict:
     from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN_ESS
+    from ..models._noise_model import parameter_unit
 
     parameters = {}
     for name, summary in fit.parameters.items():
@@ -135,7 +135,7 @@ def comparison_notes(classical: ClassicalNoise, fit: "NoisePosterior", unit: str
     )
     ratio = bias.sd / t_sd
     slow = [
-        f"{name} = {fit.parameters[name].mean:.3g} {parameter_unit(name, unit)}"
+        f"{name} = {fit.parameters[name].mean:.3g} {noise_parameter_unit(name, unit)}"
         for name in ("K", "B", "R")
         if name in fit.parameters
     ]
@@ -160,7 +160,7 @@ def comparison_notes(classical: ClassicalNoise, fit: "NoisePosterior", unit: str
         if name not in fit.parameters:
             continue
         posterior = fit.parameters[name]
-        unit_of_parameter = parameter_unit(name, unit)
+        unit_of_parameter = noise_parameter_unit(name, unit)
         if reading.kind == "upper_bound":
             if posterior.q05 > reading.ci_high:
                 filters = [term for term in fit.terms if term in FILTER_SHAPE_OF_TERM]
@@ -187,9 +187,9 @@ def comparison_notes(classical: ClassicalNoise, fit: "NoisePosterior", unit: str
 
 
 def _normal_quantile(confidence: float) -> float:
-    from scipy import stats
+    from scipy import special
 
-    return float(stats.norm.ppf(0.5 + confidence / 2))
+    return float(special.ndtri(0.5 + confidence / 2))
 
 
 def noise_result(
@@ -266,7 +266,7 @@ def noise_result(
                 "unit": unit,
                 "white_floor": noise.lsb / math.sqrt(12 * noise.rate_hz),
                 "output_white_level": noise.output_white_level,
-                "density_unit": parameter_unit("N", unit),
+                "density_unit": noise_parameter_unit("N", unit),
                 "explanation": "the samples sit on a grid of this step: their rounding error "
                 "(LSB^2/12 per sample) is a known white floor in the model, so N is the "
                 "sensor's white noise without it; the output's white level adds it back",

@@ -2,12 +2,15 @@
 2^20, 2^23 and 10^8 samples (issue 17).
 
     python benchmarks/long_recording.py [--sizes 1048576,8388608,100000000] [--folder DIR]
+                                        [--repeat 3]
 
 Each size is a Parquet file (time, gyro_x[deg/s]) of a simulated gyro at 100 Hz with white
 noise N and a rate random walk K (generated block by block, the walk carried across blocks,
 so a 10^8 file needs no 10^8 array), written once into ``--folder``. Three whole processes
 run on each, one after the other, each timed and its peak resident memory read from the
-kernel (``os.wait4``):
+kernel (``os.wait4``), each ``--repeat`` times in turn (the median time is printed with the
+range: a shared 2-core machine varies by a third from run to run); the first round of
+bayescal's runs, unmeasured, fills its caches (JAX's compilation, the traced optimisers):
 
 - the peer: allantools' ``oadev`` at octave taus plus the weighted least-squares fit of
   N, B, K to it (``_common.allan_wls_fit``), reading the channel with pyarrow;
@@ -92,6 +95,7 @@ def main() -> None:
     parser.add_argument("--folder", default=os.path.join(tempfile.gettempdir(), "bayescal-long"))
     parser.add_argument("--stream", action="store_true", help="stream every size")
     parser.add_argument("--skip-bayes-above", type=float, default=math.inf)
+    parser.add_argument("--repeat", type=int, default=3, help="runs of each process (median)")
     args = parser.parse_args()
     folder = Path(args.folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -101,7 +105,10 @@ def main() -> None:
         f"long recordings, gyro at {RATE:g} Hz, N = {TRUTH['N']} deg/s/sqrt(Hz), "
         f"K = {TRUTH['K']} deg/s*sqrt(Hz); {os.cpu_count()} CPU core(s); whole processes"
     )
-    print(f"{'samples':>11} {'run':<34} {'time s':>8} {'peak MB':>8}  N (deg/s/sqrt(Hz))")
+    print(
+        f"{'samples':>11} {'run':<34} {'time s':>8} {'(range)':>13} {'peak MB':>8}  "
+        "N (deg/s/sqrt(Hz))"
+    )
     rows = []
     for n in (int(float(size)) for size in args.sizes.split(",")):
         path = folder / f"gyro_{n}.parquet"
@@ -137,14 +144,28 @@ def main() -> None:
         if n > args.skip_bayes_above:
             runs.pop("bayescal noise (posterior)")
         for name, command in runs.items():
-            seconds, peak, text = measured(command, folder)
+            if name.startswith("bayescal"):
+                measured(command, folder)  # fills the caches a user's second run finds
+        rounds = [
+            {name: measured(command, folder) for name, command in runs.items()}
+            for _ in range(args.repeat)
+        ]
+        for name in runs:
+            times = sorted(round_[name][0] for round_ in rounds)
+            seconds = float(np.median(times))
+            peak = max(round_[name][1] for round_ in rounds)
+            text = rounds[-1][name][2]
             if name.startswith("allantools"):
                 estimate = f"{json.loads(text.strip().splitlines()[-1])['N']:.6g} (WLS fit)"
             else:
                 output = "classical.json" if "classical" in name else "posterior.json"
                 estimate = _n_of(json.loads((folder / output).read_text()))
             rows.append((n, name, seconds, peak))
-            print(f"{n:>11} {name:<34} {seconds:>8.1f} {peak:>8.0f}  {estimate}", flush=True)
+            spread = f"({times[0]:.1f}-{times[-1]:.1f})"
+            print(
+                f"{n:>11} {name:<34} {seconds:>8.1f} {spread:>13} {peak:>8.0f}  {estimate}",
+                flush=True,
+            )
     _growth(rows)
 
 

@@ -13,7 +13,6 @@ import math
 
 import numpy as np
 from scipy import fft, stats
-from scipy.signal import windows
 
 from ..classical._allan import allan_deviation
 from ..classical._edf import equivalent_degrees_of_freedom
@@ -24,6 +23,7 @@ from ..models._composite import (
     block_means,
     model_allan_variance,
 )
+from ..models._whittle import tukey_window
 from ..models.effects.gauss_markov import GaussMarkov
 from ..models.effects.outliers import robust_scores
 from ..recording._levels import discrete_step, rail_check
@@ -164,7 +164,7 @@ def line_search(fit: ModelFit, rate_hz: float) -> tuple[float, float, int]:
     finite = np.isfinite(residual)
     increments = np.diff(np.where(finite, residual, np.nanmean(residual)))
     length = increments.size
-    taper = windows.tukey(length, 0.1)
+    taper = tukey_window(length, 0.1)
     power = np.abs(fft.rfft(taper * (increments - increments.mean()))) ** 2 / np.sum(taper**2)
     _, s0 = bin_ratios(fit)
     summary = fit.design.summary

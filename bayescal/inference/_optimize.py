@@ -16,6 +16,7 @@ import numpy as np
 import optimistix as optx
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from ._traced import persistent_jit
 
 RTOL = ATOL = 1e-9
 MAX_STEPS = 2000
@@ -35,7 +36,7 @@ class Mode(eqx.Module):
         return np.linalg.pinv(self.hessian)
 
 
-@eqx.filter_jit
+@persistent_jit
 def _minimise(log_density, model, starts):
     def objective(theta, _):
         return -log_density(model, theta)

@@ -62,7 +62,6 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from scipy import fft
-from scipy.signal import windows
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
@@ -153,11 +152,31 @@ def _bin_edges(n_frequencies: int, width: float) -> np.ndarray:
     return np.array(edges)
 
 
+def tukey_window(length: int, fraction: float) -> np.ndarray:
+    """The symmetric Tukey (tapered cosine) window of ``length`` points whose tapers span
+    ``fraction`` (0 < fraction < 1) of it, as ``scipy.signal.windows.tukey`` computes it
+    (importing ``scipy.signal`` costs a run 1.7 s)."""
+    if length <= 1:
+        return np.ones(length)
+    n = np.arange(length, dtype=float)
+    width = math.floor(fraction * (length - 1) / 2.0)
+    rising = n[: width + 1]
+    falling = n[length - width - 1 :]
+    return np.concatenate(
+        (
+            0.5 * (1 + np.cos(np.pi * (-1 + 2.0 * rising / fraction / (length - 1)))),
+            np.ones(max(length - 2 * width - 2, 0)),
+            0.5
+            * (1 + np.cos(np.pi * (-2.0 / fraction + 1 + 2.0 * falling / fraction / (length - 1)))),
+        )
+    )
+
+
 @functools.lru_cache(maxsize=4)
 def _taper(length: int, taper_fraction: float) -> tuple[np.ndarray, np.ndarray]:
     """The Tukey taper and its autocorrelation at lags 0 .. length - 1 (cached: every model
     of a record shares them)."""
-    taper = windows.tukey(length, taper_fraction)
+    taper = tukey_window(length, taper_fraction)
     size = 2 * length
     autocorrelation = fft.irfft(np.abs(fft.rfft(taper, size)) ** 2, size)[:length]
     return taper, autocorrelation

@@ -1,0 +1,136 @@
+"""Traced functions kept on disk between runs.
+
+JAX's persistent compilation cache keeps XLA's compilation, not the tracing before it, and
+tracing the term search's optimisers (BFGS from two starts with the Hessian at the optimum,
+one per output-filter family) cost a ``noise`` run about five seconds of Python: more than
+the whole classical analysis of 10^7 samples. :func:`persistent_jit` keeps the traced
+function itself, exported as StableHLO (``jax.export``: a versioned, portable format, not
+pickled code), keyed by everything that shapes it: the function, the static part of its
+arguments, the shapes and dtypes of their arrays, bayescal's own source, the versions of JAX
+and the libraries traced through, and the device. A later run with the same structure loads
+it in milliseconds and XLA's compilation comes from JAX's cache; a changed line of bayescal
+or another JAX misses and traces afresh. The exported function computes what the traced one
+does: the same StableHLO, compiled by the same XLA.
+
+The cache is off unless ``BAYESCAL_TRACE_CACHE`` names a folder. The command line sets it
+to ``~/.cache/bayescal/traces`` (``XDG_CACHE_HOME`` moves it), beside JAX's own cache; a
+library user opts in by setting it. Arguments whose static part has no stable description
+(an object printed with its address) are traced as ``eqx.filter_jit`` would, and not stored.
+"""
+
+import functools
+import hashlib
+import os
+from collections.abc import Callable
+from importlib.metadata import version
+from pathlib import Path
+
+import equinox as eqx
+import jax
+
+from .. import _x64  # noqa: F401  (float64 before any JAX array)
+
+CACHE_VARIABLE = "BAYESCAL_TRACE_CACHE"
+_PACKAGES = ("jax", "jaxlib", "equinox", "optimistix", "lineax")
+
+
+def persistent_jit(fun: Callable) -> Callable:
+    """``eqx.filter_jit(fun)`` whose traced function persists between runs (module
+    docstring). ``fun`` takes positional arguments and returns a pytree of arrays."""
+    jitted = eqx.filter_jit(fun)
+    compiled = {}
+
+    @functools.wraps(fun)
+    def call(*args):
+        folder = os.environ.get(CACHE_VARIABLE)
+        if not folder:
+            return jitted(*args)
+        dynamic, static = eqx.partition(args, eqx.is_array)
+        leaves, treedef = jax.tree_util.tree_flatten(dynamic)
+        key = _key(fun, treedef, static, leaves)
+        if key is None:
+            return jitted(*args)
+        if key not in compiled:
+            path = Path(folder) / f"{fun.__name__}-{key}.stablehlo"
+            exported = _load(path)
+            if exported is None:
+                exported = _export_and_store(fun, treedef, static, leaves, path)
+            compiled[key] = jax.jit(exported.call)
+        return compiled[key](*leaves)
+
+    return call
+
+
+def _token(leaf) -> str | None:
+    """A stable description of a static leaf, or None when it has none."""
+    if callable(leaf) and hasattr(leaf, "__qualname__"):
+        return f"{leaf.__module__}.{leaf.__qualname__}"
+    if leaf is None or isinstance(leaf, (bool, int, float, str)):
+        return repr(leaf)
+    return None
+
+
+def _key(fun, treedef, static, leaves) -> str | None:
+    """The digest of everything the traced function depends on, or None when a static part
+    has no stable description."""
+    static_leaves, static_treedef = jax.tree_util.tree_flatten(static)
+    tokens = [_token(leaf) for leaf in static_leaves]
+    structure = f"{treedef}|{static_treedef}"
+    if None in tokens or " at 0x" in structure:
+        return None
+    description = "\n".join(
+        [
+            _token(fun) or "",
+            structure,
+            *tokens,
+            *(f"{leaf.shape}:{leaf.dtype}:{getattr(leaf, 'weak_type', False)}" for leaf in leaves),
+            _environment(),
+        ]
+    )
+    return hashlib.sha256(description.encode()).hexdigest()[:32]
+
+
+@functools.cache
+def _environment() -> str:
+    """bayescal's source, the versions of the libraries traced through, and the device."""
+    source = hashlib.sha256()
+    package = Path(__file__).resolve().parents[1]
+    for path in sorted(package.rglob("*.py")):
+        source.update(path.read_bytes())
+    device = jax.devices()[0]
+    return "|".join(
+        [
+            source.hexdigest(),
+            *(f"{name}={version(name)}" for name in _PACKAGES),
+            device.platform,
+            device.device_kind,
+            str(jax.config.jax_enable_x64),
+        ]
+    )
+
+
+def _load(path: Path):
+    """The exported function stored at ``path``, or None (absent or unreadable: traced
+    again and stored anew)."""
+    try:
+        return jax.export.deserialize(bytearray(path.read_bytes()))
+    except Exception:  # any unreadable entry is only a cache miss
+        return None
+
+
+def _export_and_store(fun, treedef, static, leaves, path: Path):
+    """Trace ``fun`` for these arguments, export it and store it (a folder that cannot be
+    written only costs the next run its tracing)."""
+
+    def flat(*arrays):
+        return fun(*eqx.combine(jax.tree_util.tree_unflatten(treedef, arrays), static))
+
+    exported = jax.export.export(jax.jit(flat))(*leaves)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        partial = path.with_suffix(f".{os.getpid()}.partial")
+        partial.write_bytes(exported.serialize())
+        partial.replace(path)  # atomic: a concurrent run reads the whole file or none
+    except OSError:
+        pass
+    return exported

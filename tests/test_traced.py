@@ -1,0 +1,74 @@
+"""The trace cache (bayescal.inference._traced): a traced function stored by one run is
+loaded by the next and computes the same numbers, to the last bit; what cannot be described
+stably is never stored; an unreadable entry is traced again."""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from bayescal.inference import _traced
+
+
+def _weighted_norm(scale, vector, power):
+    return scale * jnp.sum(jnp.abs(vector) ** power)
+
+
+class _Unstable:
+    """A static argument printed with its address: no stable key."""
+
+    def __init__(self, power):
+        self.power = power
+
+
+def _with_object(vector, holder):
+    return jnp.sum(vector**holder.power)
+
+
+@pytest.fixture
+def folder(tmp_path, monkeypatch):
+    monkeypatch.setenv(_traced.CACHE_VARIABLE, str(tmp_path))
+    return tmp_path
+
+
+def test_a_stored_function_is_loaded_by_the_next_run_and_computes_the_same(folder, monkeypatch):
+    vector = np.linspace(-1.0, 2.0, 7)
+    first = _traced.persistent_jit(_weighted_norm)(np.float64(1.5), vector, 3.0)
+    stored = list(folder.glob("_weighted_norm-*.stablehlo"))
+    assert len(stored) == 1
+    # A new process: a fresh wrapper, which must load and never trace.
+    monkeypatch.setattr(_traced, "_export_and_store", lambda *a: pytest.fail("traced again"))
+    second = _traced.persistent_jit(_weighted_norm)(np.float64(1.5), vector, 3.0)
+    assert np.asarray(second).tobytes() == np.asarray(first).tobytes()
+    assert float(first) == pytest.approx(1.5 * np.sum(np.abs(vector) ** 3), rel=1e-14)
+
+
+def test_static_values_and_shapes_key_separate_entries(folder):
+    cached = _traced.persistent_jit(_weighted_norm)
+    cached(np.float64(1.0), np.ones(4), 2.0)
+    cached(np.float64(1.0), np.ones(4), 3.0)  # another static power
+    cached(np.float64(1.0), np.ones(5), 2.0)  # another shape
+    cached(np.float64(2.0), np.ones(4), 2.0)  # another value of an array: the same entry
+    assert len(list(folder.glob("*.stablehlo"))) == 3
+
+
+def test_an_unstable_static_argument_is_computed_but_never_stored(folder):
+    value = _traced.persistent_jit(_with_object)(np.arange(3.0), _Unstable(2))
+    assert float(value) == 5.0
+    assert not list(folder.iterdir())
+
+
+def test_an_unreadable_entry_is_traced_and_stored_again(folder):
+    vector = np.arange(4.0)
+    expected = float(_traced.persistent_jit(_weighted_norm)(np.float64(1.0), vector, 2.0))
+    (entry,) = folder.glob("*.stablehlo")
+    entry.write_bytes(b"not a flatbuffer")
+    again = float(_traced.persistent_jit(_weighted_norm)(np.float64(1.0), vector, 2.0))
+    assert again == expected
+    assert entry.read_bytes() != b"not a flatbuffer"
+
+
+def test_without_the_variable_nothing_is_written(tmp_path, monkeypatch):
+    monkeypatch.delenv(_traced.CACHE_VARIABLE, raising=False)
+    monkeypatch.chdir(tmp_path)
+    assert float(_traced.persistent_jit(_weighted_norm)(np.float64(2.0), np.ones(3), 2.0)) == 6.0
+    assert not list(tmp_path.iterdir())

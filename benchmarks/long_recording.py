@@ -180,6 +180,8 @@ def _n_of(document: dict) -> str:
 
 def _growth(rows) -> None:
     """Time and memory of each run per sample count, relative to its smallest size."""
+    if len({row[0] for row in rows}) < 2:
+        return
     print("\ngrowth with length (relative to the smallest size)")
     for name in dict.fromkeys(row[1] for row in rows):
         mine = [row for row in rows if row[1] == name]

@@ -514,3 +514,87 @@ def joint_fit(manifest, fleet) -> dict:
         "tau_unit": values["tau_unit"],
         "tau_run": values["tau_run"],
     }
+
+
+# ---------------------------------------------------------------------------------------------
+# How each recording is read: the options every command that reads recordings shares
+
+
+def _counts_task(tmp_path, **reading):
+    """A raw-count gyro (131 LSB per deg/s, white noise N = 0.004 deg/s/sqrt(Hz), bias
+    0.3 deg/s) logged as CSV behind two lines of logger metadata."""
+    from bayescal.capabilities._fleet import RecordingTask
+
+    values = bc.NoiseModel(rate_hz=100.0, bias=0.3, N=0.004).simulate(2**12, seed=5)
+    path = tmp_path / "logger.csv"
+    rows = "\n".join(f"{k / 100:.2f},{131 * v:.3f}" for k, v in enumerate(values))
+    path.write_text(f"logger v2.1\nserial 0042\ntime,gyro_x\n{rows}\n")
+    grid = {"unit": "deg/s", "scale": 1 / 131, "rate": None, "gaps": "error"}
+    return RecordingTask(
+        row=1,
+        path=str(path),
+        unit="SN01",
+        run="1",
+        channel="gyro_x",
+        grid={**grid, "time_column": None, "time_unit": None, "start": None, "stop": None},
+        terms=("white",),
+        sensor=None,
+        seed=3,
+        n_walkers=32,
+        max_steps=40_000,
+        reading={"skip_rows": 2, **reading},
+    )
+
+
+def test_a_worker_reads_a_logger_file_of_raw_counts_as_told(tmp_path):
+    """skip_rows passes the logger's lines, scale turns counts into deg/s: the recording's N
+    comes back in deg/s/sqrt(Hz), near the truth (a 41 s record: within 10 %)."""
+    from bayescal.capabilities._fleet import fit_recording
+    from bayescal.inference._population import RecordingDraws
+
+    result = fit_recording(_counts_task(tmp_path))
+    assert isinstance(result, RecordingDraws), result
+    assert result.channel_unit == "deg/s", result
+    n = math.exp(float(np.median(result.log_draws["N"])))
+    assert n == pytest.approx(0.004, rel=0.1)
+    assert float(np.mean(result.bias_mean)) == pytest.approx(0.3, abs=0.01)
+
+
+def test_a_streamed_recording_refuses_the_options_of_arrays_and_bags(tmp_path, monkeypatch):
+    from bayescal.capabilities._fleet import RecordingFailure, fit_recording
+    from bayescal.recording import _stream
+
+    monkeypatch.setattr(_stream, "is_long_recording", lambda path: True)
+    failure = fit_recording(_counts_task(tmp_path, names=("time", "gyro_x")))
+    assert isinstance(failure, RecordingFailure) and failure.kind == "input", failure
+    assert "names does not apply to a long recording" in failure.message
+
+
+def test_the_command_passes_the_reading_options_to_every_recording(two_files, run_cli, monkeypatch):
+    from bayescal.capabilities import _fleet
+
+    given = {}
+
+    def stop_after_reading_the_options(manifest, channel, **options):
+        given.update(options)
+        raise bc.InputError("stopped by the test")
+
+    monkeypatch.setattr(_fleet, "fit_fleet", stop_after_reading_the_options)
+    manifest = write(two_files / "fleet.csv", "path,unit\na.csv,U1\nb.csv,U2\n")
+    code, _, stderr = run_cli(
+        "fleet",
+        manifest,
+        "--channel",
+        "gyro_x",
+        "--skip-rows",
+        "3",
+        "--unit",
+        "deg/s",
+        "--scale",
+        "1/131",
+        "--names",
+        "t,gyro_x",
+    )
+    assert code == 2 and "stopped by the test" in stderr, stderr
+    assert given["skip_rows"] == 3 and given["scale"] == pytest.approx(1 / 131)
+    assert given["unit"] == "deg/s" and list(given["names"]) == ["t", "gyro_x"], given

@@ -82,6 +82,9 @@ class RecordingTask:
     n_walkers: int
     max_steps: int
     temperature_c: float | None = None
+    reading: dict = field(default_factory=dict)
+    """How the file is read (:func:`~bayescal.load_recording`'s options: ``skip_rows``,
+    ``names``, ``topic``, ``samples_axis``, ``channels_axis``)."""
 
 
 @dataclass(frozen=True)
@@ -171,9 +174,11 @@ def fit_recording(task: RecordingTask) -> RecordingDraws | RecordingFailure:
     started = time.perf_counter()
     try:
         if is_long_recording(task.path):  # a worker's memory bounded by a block, as noise's
-            channel = stream_channel(task.path, task.channel, **task.grid)
+            _refuse_unstreamed(task)
+            skip_rows = task.reading.get("skip_rows", 0)
+            channel = stream_channel(task.path, task.channel, skip_rows=skip_rows, **task.grid)
         else:
-            channel = load_recording(task.path).channel(task.channel, **task.grid)
+            channel = load_recording(task.path, **task.reading).channel(task.channel, **task.grid)
         fit = fit_noise(
             channel,
             terms=task.terms,
@@ -205,6 +210,22 @@ def fit_recording(task: RecordingTask) -> RecordingDraws | RecordingFailure:
             + "; ".join(fit.misfits),
         )
     return recording_draws(fit, task, time.perf_counter() - started)
+
+
+def _refuse_unstreamed(task: RecordingTask) -> None:
+    """A long recording is streamed (a Parquet file or a text table, read in blocks): the
+    options of arrays, bags and headerless tables do not apply to it."""
+    given = [
+        name
+        for name in ("names", "topic", "samples_axis", "channels_axis")
+        if task.reading.get(name) is not None
+    ]
+    if given:
+        raise InputError(
+            f"{given[0]} does not apply to a long recording, which is streamed (read in blocks)",
+            source=task.path,
+            fix="give the file a header and leave it out, or split the recording",
+        )
 
 
 def worker_version() -> str:
@@ -709,12 +730,18 @@ def fit_fleet(
     spec=None,
     seed: int = 0,
     unit: str | None = None,
+    scale: float | None = None,
     rate: float | None = None,
     time_column: str | None = None,
     time_unit: str | None = None,
     gaps: str = "error",
     start: float | None = None,
     stop: float | None = None,
+    skip_rows: int = 0,
+    names=None,
+    topic: str | None = None,
+    samples_axis: int | None = None,
+    channels_axis: int | None = None,
     scheduler=None,
     workers: int | None = None,
     n_walkers: int = 32,
@@ -746,9 +773,15 @@ def fit_fleet(
         parameter's unit for the channel).
     seed : int
         The fleet's seed; each recording's and the population's derive from it.
-    unit, rate, time_column, time_unit, gaps, start, stop
-        How each recording's channel is read (:meth:`~bayescal.Recording.channel`); a
-        manifest row's ``rate`` overrides ``rate``.
+    unit, scale, rate, time_column, time_unit, gaps, start, stop
+        How each recording's channel is put on its grid (:meth:`~bayescal.Recording.channel`;
+        ``scale`` turns raw counts into ``unit``); a manifest row's ``rate`` overrides
+        ``rate``.
+    skip_rows, names, topic, samples_axis, channels_axis
+        How each file is read (:func:`~bayescal.load_recording`): logger lines before a text
+        table's header, the names of a headerless table's or an array's columns, a ROS bag's
+        topic, the axes of an N-D array. A long recording (streamed) takes ``skip_rows``
+        alone; given the others, it is left out with the reason.
     scheduler : str or distributed.Client, optional
         A Dask scheduler's address (``tcp://host:port``) or a client; None starts a
         ``LocalCluster`` of ``workers`` processes (default: one per core).
@@ -803,6 +836,7 @@ def fit_fleet(
             _card_limits(card, parse_unit(unit).name)
     grid = {
         "unit": unit,
+        "scale": scale,
         "time_column": time_column,
         "time_unit": time_unit,
         "gaps": gaps,
@@ -823,6 +857,13 @@ def fit_fleet(
             n_walkers=n_walkers,
             max_steps=max_steps,
             temperature_c=row.temperature_c,
+            reading={
+                "skip_rows": skip_rows,
+                "names": names,
+                "topic": topic,
+                "samples_axis": samples_axis,
+                "channels_axis": channels_axis,
+            },
         )
         for row in manifest.rows
     ]

@@ -157,6 +157,55 @@ def three_columns(text: str) -> tuple[str, str, str]:
     return names
 
 
+def add_reading_arguments(group) -> None:
+    """How a file is read and its channel scaled, for every command that reads recordings: a
+    ROS bag's topic, raw counts' scale, a logger's lines before the header, the names of a
+    headerless table's or an array's columns, and an N-D array's axes."""
+    group.add_argument(
+        "--topic",
+        help="sensor_msgs/Imu topic of a ROS bag (default: its only one); its columns are "
+        "time, bag_time, gyro_x/y/z [rad/s], acc_x/y/z [m/s^2]",
+    )
+    group.add_argument(
+        "--scale",
+        type=scale,
+        metavar="FACTOR|SENSOR",
+        help="multiply the channel by FACTOR (raw counts to --unit: 1/131 for 131 LSB per "
+        "deg/s), or by the resolution a sensor card gives (bayescal sensors), which also "
+        "sets the unit",
+    )
+    group.add_argument(
+        "--skip-rows",
+        type=row_count,
+        default=0,
+        metavar="N",
+        help="text table: lines before the header to skip (logger metadata); lines that "
+        "start with '#' are skipped anyway",
+    )
+    group.add_argument(
+        "--names",
+        type=column_names,
+        metavar="[VAR:]A,B,...",
+        help="names of the columns of a table without a header, or of the channels of an "
+        "array (.npz/.npy/.mat; VAR: which array), e.g. t,gyro_x,gyro_y,gyro_z; a unit may "
+        "follow in brackets, gyro_x[deg/s] (default: column_0 ..., or VAR_0 ...)",
+    )
+    group.add_argument(
+        "--samples-axis",
+        type=axis,
+        metavar="K",
+        help="array of two or more axes: the axis that holds the samples, from 0 (default: "
+        "the longest)",
+    )
+    group.add_argument(
+        "--channels-axis",
+        type=axis,
+        metavar="K",
+        help="array of two or more axes: the axis that holds the channels (default: the last "
+        "other axis); further axes become records, named NAME_rec0, NAME_rec1, ...",
+    )
+
+
 def add_recording_arguments(
     parser: argparse.ArgumentParser,
     *,
@@ -194,23 +243,11 @@ def add_recording_arguments(
             "(default: every gyro and accelerometer column, found by name)",
         )
     group.add_argument(
-        "--topic",
-        help="sensor_msgs/Imu topic of a ROS bag (default: its only one); its columns are "
-        "time, bag_time, gyro_x/y/z [rad/s], acc_x/y/z [m/s^2]",
-    )
-    group.add_argument(
         "--unit",
         help="unit of the channel (deg/s, rad/s, m/s^2, g, or a count unit such as LSB); "
         "default: from the header, e.g. gyro_x[deg/s]",
     )
-    group.add_argument(
-        "--scale",
-        type=scale,
-        metavar="FACTOR|SENSOR",
-        help="multiply the channel by FACTOR (raw counts to --unit: 1/131 for 131 LSB per "
-        "deg/s), or by the resolution a sensor card gives (bayescal sensors), which also "
-        "sets the unit",
-    )
+    add_reading_arguments(group)
     group.add_argument(
         "--rate",
         type=rate,
@@ -220,36 +257,6 @@ def add_recording_arguments(
     group.add_argument("--time-column", metavar="NAME", help="time column (default: time or t)")
     group.add_argument(
         "--time-unit", metavar="UNIT", help="unit of the time column (s, ms, us, ns)"
-    )
-    group.add_argument(
-        "--skip-rows",
-        type=row_count,
-        default=0,
-        metavar="N",
-        help="text table: lines before the header to skip (logger metadata); lines that "
-        "start with '#' are skipped anyway",
-    )
-    group.add_argument(
-        "--names",
-        type=column_names,
-        metavar="[VAR:]A,B,...",
-        help="names of the columns of a table without a header, or of the channels of an "
-        "array (.npz/.npy/.mat; VAR: which array), e.g. t,gyro_x,gyro_y,gyro_z; a unit may "
-        "follow in brackets, gyro_x[deg/s] (default: column_0 ..., or VAR_0 ...)",
-    )
-    group.add_argument(
-        "--samples-axis",
-        type=axis,
-        metavar="K",
-        help="array of two or more axes: the axis that holds the samples, from 0 (default: "
-        "the longest)",
-    )
-    group.add_argument(
-        "--channels-axis",
-        type=axis,
-        metavar="K",
-        help="array of two or more axes: the axis that holds the channels (default: the last "
-        "other axis); further axes become records, named NAME_rec0, NAME_rec1, ...",
     )
     group.add_argument(
         "--gaps",
@@ -295,6 +302,17 @@ def add_recording_arguments(
     )
 
 
+def reading_options(args) -> dict:
+    """How the file is read, from the recording arguments (:func:`add_reading_arguments`)."""
+    return {
+        "topic": getattr(args, "topic", None),
+        "skip_rows": getattr(args, "skip_rows", 0),
+        "names": getattr(args, "names", None),
+        "samples_axis": getattr(args, "samples_axis", None),
+        "channels_axis": getattr(args, "channels_axis", None),
+    }
+
+
 def load(args, path=None):
     """The recording named by the arguments (``path`` instead of ``args.file`` when given)."""
     from ..recording._recording import load_recording
@@ -302,14 +320,7 @@ def load(args, path=None):
     path = path or args.file
     if not path:
         raise InputError("no recording given", fix="pass a FILE")
-    return load_recording(
-        path,
-        topic=getattr(args, "topic", None),
-        skip_rows=getattr(args, "skip_rows", 0),
-        names=getattr(args, "names", None),
-        samples_axis=getattr(args, "samples_axis", None),
-        channels_axis=getattr(args, "channels_axis", None),
-    )
+    return load_recording(path, **reading_options(args))
 
 
 def unit_and_scale(args, name: str | None) -> tuple[str | None, float | None]:

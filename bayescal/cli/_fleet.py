@@ -11,6 +11,7 @@ import sys
 
 from .._errors import InputError
 from ._arguments import (
+    add_reading_arguments,
     declare_outputs,
     finite_float,
     health_exit,
@@ -18,7 +19,9 @@ from ._arguments import (
     positive_float,
     positive_int,
     progress,
+    reading_options,
     seed,
+    unit_and_scale,
     walkers,
 )
 
@@ -45,6 +48,7 @@ def add_parser(commands) -> None:
     group.add_argument(
         "--unit", help="unit of the channel (deg/s, rad/s, m/s^2, g ...); default: the header"
     )
+    add_reading_arguments(group)
     group.add_argument(
         "--rate",
         type=positive_float,
@@ -140,6 +144,7 @@ def run(args) -> int:
     from ..inference._population import population_datatree
     from ..report._fleet import fleet_page, fleet_result, fleet_text
 
+    unit, scale = unit_and_scale(args, args.channel)
     fleet = fit_fleet(
         manifest,
         args.channel,
@@ -147,13 +152,15 @@ def run(args) -> int:
         sensor=args.sensor,
         spec=args.spec,
         seed=args.seed,
-        unit=args.unit,
+        unit=unit,
+        scale=scale,
         rate=args.rate,
         time_column=args.time_column,
         time_unit=args.time_unit,
         gaps=args.gaps,
         start=args.start,
         stop=args.stop,
+        **reading_options(args),
         scheduler=args.scheduler,
         workers=args.workers,
         n_walkers=args.walkers,

@@ -43,11 +43,20 @@ def smac(samples: int):
     yield "ADIS16405 100 Hz (SMAC)", "acc_x", run[:, 3] * float(counts["acc_lsb_g"]), rate, "g"
 
 
-def pad(label: str, path: Path, names: tuple[str, ...]):
+def pad(label: str, path: Path, units: dict, time_unit: str | None = None):
+    """The quiet window before liftoff of each channel in ``units`` (name -> unit, None for
+    the header's)."""
     recording = bc.load_recording(path)
-    window = bc.find_pad_window(recording)
-    for name in names:
-        channel = recording.channel(name, start=window.start_s, stop=window.stop_s, gaps="split")
+    window = bc.find_pad_window(recording, time_unit=time_unit)
+    for name, unit in units.items():
+        channel = recording.channel(
+            name,
+            unit=unit,
+            time_unit=time_unit,
+            start=window.start_s,
+            stop=window.stop_s,
+            gaps="split",
+        )
         yield label, name, channel, None, None
 
 
@@ -67,13 +76,15 @@ def records(samples: int):
     yield from pad(
         "ADIS16405 816 Hz pad (PSAS L-12)",
         SHARED / "psas_adis16405/Launch-12/telemetry_ADIS_decoded.csv",
-        ("gyro_x_dps", "acc_x_mps2"),
+        {"gyro_x_dps": None, "acc_x_mps2": None},
     )
     yield from mpu6050()
     yield from pad(
         "flight computer pad (TARS mk2)",
         SHARED / "issuiuc_rocket_flights/20211030/flight_computer_trimmed.csv",
-        ("gx", "ax"),
+        # Millisecond stamps and units the log does not write (the TARS firmware's deg/s, g).
+        {"gx": "deg/s", "ax": "g"},
+        time_unit="ms",
     )
 
 

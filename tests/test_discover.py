@@ -241,3 +241,45 @@ def test_a_mismatch_too_weak_to_name_is_reported_as_unexplained():
     assert document["unexplained"]["checks"] == ["residual_vs_temperature"]
     assert document["unexplained"]["best_candidate"] == "thermal_bias"
     assert document["unexplained"]["log_bayes_factor"] < math.log(100)
+
+
+def _time_search_context(duration_s: float, rate_hz: float = 100.0):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(
+        data=SimpleNamespace(duration_s=duration_s, rate_hz=rate_hz), summaries={}
+    )
+
+
+def test_a_record_of_seconds_searches_no_time_constant():
+    """A pad window of 5.8 s (the TARS mk2 flight log's) is shorter than three times the
+    shortest time constant: the Gauss-Markov and warm-up searches are not proposed (they
+    once searched a reversed grid and crashed on a 10^35 s Gauss-Markov covariance)."""
+    from bayescal.capabilities import _discovery
+
+    context = _time_search_context(5.8)
+    assert _discovery.search_time(context, lambda t: pytest.fail("fitted"), "gauss_markov") is None
+
+
+def test_a_flat_time_profile_samples_its_interval_within_the_record(monkeypatch):
+    """Where the score barely changes with the time constant, the parabola's 90 % interval
+    runs to 10^30 s; the ends are sampled at the record's length and the shortest time
+    constant instead, where the record can still tell a decay from a ramp or white noise."""
+    from types import SimpleNamespace
+
+    from bayescal.capabilities import _discovery
+
+    def almost_flat(spec):
+        log_t = math.log(spec)
+        return SimpleNamespace(
+            schwarz=-1e-6 * (log_t - math.log(30.0)) ** 2,
+            spec=SimpleNamespace(regressor_names=lambda: []),
+            beta=[],
+            noise={"G": 0.0},
+        )
+
+    monkeypatch.setattr(_discovery, "fit_model", lambda context, spec: almost_flat(spec))
+    context = _time_search_context(600.0)
+    _, record = _discovery.search_time(context, lambda t: t, "gauss_markov")
+    times = record["time_constant_s"]
+    assert min(times) >= 5.0 and max(times) == pytest.approx(600.0)

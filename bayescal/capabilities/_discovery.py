@@ -297,11 +297,22 @@ def fit_model(context: "Context", spec: ModelSpec) -> ModelFit:
     )
 
 
-def _time_grid(data) -> np.ndarray:
-    return np.geomspace(max(5.0, 20.0 / data.rate_hz), data.duration_s / 3.0, GRID_POINTS)
+def _shortest_time_constant(data) -> float:
+    """The shortest time constant searched, s: 5 s, or 20 samples (below it a decay or a
+    Gauss-Markov process is white noise to the record)."""
+    return max(5.0, 20.0 / data.rate_hz)
 
 
-def search_time(context: "Context", make_spec, key: str) -> tuple[ModelFit, dict]:
+def _time_grid(data) -> np.ndarray | None:
+    """The searched time constants, up to a third of the record; None when that third is no
+    longer than the shortest (a record of seconds: a pad window)."""
+    shortest, longest = _shortest_time_constant(data), data.duration_s / 3.0
+    if longest <= shortest:
+        return None
+    return np.geomspace(shortest, longest, GRID_POINTS)
+
+
+def search_time(context: "Context", make_spec, key: str) -> tuple[ModelFit, dict] | None:
     """The best fit over a log grid of time constants, refined around the best point by the
     midpoints to its neighbours and then by parabolic steps in log time constant (a
     deterministic term with a time constant off by a third leaves a residual that a noise
@@ -312,10 +323,13 @@ def search_time(context: "Context", make_spec, key: str) -> tuple[ModelFit, dict
     the best is the grid's longest time constant, the grid is extended by its own step until
     the score falls, up to the record's length (beyond it a decay is a ramp): a true value
     just past the grid's end would otherwise be located at the end with a zero-width
-    interval."""
+    interval. None for a record too short to search (:func:`_time_grid`)."""
     previous = context.summaries.get(("best time", key))
     if previous is None:
-        grid = list(_time_grid(context.data))
+        grid = _time_grid(context.data)
+        if grid is None:
+            return None
+        grid = list(grid)
     else:
         grid = [previous / 1.6, previous, previous * 1.6]
     fits = {t: fit_model(context, make_spec(float(t))) for t in grid}
@@ -342,8 +356,15 @@ def search_time(context: "Context", make_spec, key: str) -> tuple[ModelFit, dict
     peak = _peak_parabola(np.log(times), [fits[t].schwarz for t in times])
     if peak is not None:
         half = math.sqrt(PROFILE_DROP / -peak[1])
-        for end in (math.exp(peak[0] - half), math.exp(peak[0] + half)):
-            fits[end] = fit_model(context, make_spec(end))
+        # A flat profile puts the ends where the record tells nothing apart: past its length
+        # a decay is a ramp, below the shortest time constant white noise (and a Gauss-Markov
+        # block covariance at 10^35 s is rounding error, not a covariance).
+        low, high = _shortest_time_constant(context.data), context.data.duration_s
+        for log_end in (peak[0] - half, peak[0] + half):
+            # Capped before exp, which overflows at such an end.
+            clipped = min(max(math.exp(min(log_end, math.log(high))), low), high)
+            if clipped not in fits:
+                fits[clipped] = fit_model(context, make_spec(clipped))
     times = sorted(fits)
     winner = max(times, key=lambda t: fits[t].schwarz)
     context.summaries[("best time", key)] = winner

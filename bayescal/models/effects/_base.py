@@ -45,7 +45,8 @@ class Search(Protocol):
         """The MAP fit of model ``spec``."""
 
     def search_time(self, make_spec, key: str):
-        """The best fit over a searched time constant: (fit, search record)."""
+        """The best fit over a searched time constant: (fit, search record); None when the
+        record is too short to search one (its third no longer than the shortest)."""
 
     def line_frequency(self, fit) -> float:
         """The frequency of the strongest spectral line the fit leaves in its residual."""

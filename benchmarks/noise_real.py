@@ -10,8 +10,9 @@ Recordings (../shared/data, each folder's SOURCE.txt says where from):
 - ADIS16405 at about 816 Hz on a rocket's pad (PSAS Launch-12, the quiet window before
   liftoff), gyro x and accelerometer x;
 - MPU-6050 at 99.3 Hz (sunsided, set-2, 10 min unmoved), gyro x and accelerometer x;
-- a flight computer on the pad (ISSUIUC TARS mk2, 2021-10-30, the quiet window before
-  liftoff, 100 Hz), gyro x and accelerometer x.
+- flight computers on the pad (ISSUIUC TARS mk2, 2021-10-30, and TARS mk3.1, 2022-10-29: the
+  window before liftoff, 5.8 s and 3.1 s at 100 Hz; the second is not quiet), gyro x and
+  accelerometer x.
 
 The table in docs/methods/validation.md ("Real recordings") is this script's output.
 """
@@ -49,14 +50,17 @@ def pad(label: str, path: Path, units: dict, time_unit: str | None = None):
     recording = bc.load_recording(path)
     window = bc.find_pad_window(recording, time_unit=time_unit)
     for name, unit in units.items():
-        channel = recording.channel(
-            name,
-            unit=unit,
-            time_unit=time_unit,
-            start=window.start_s,
-            stop=window.stop_s,
-            gaps="split",
-        )
+        try:
+            channel = recording.channel(
+                name,
+                unit=unit,
+                time_unit=time_unit,
+                start=window.start_s,
+                stop=window.stop_s,
+                gaps="split",
+            )
+        except bc.InputError as error:  # the loader's refusal is that row's result
+            channel = error
         yield label, name, channel, None, None
 
 
@@ -86,6 +90,12 @@ def records(samples: int):
         {"gx": "deg/s", "ax": "g"},
         time_unit="ms",
     )
+    yield from pad(
+        "flight computer pad (TARS mk3.1)",
+        SHARED / "issuiuc_rocket_flights/20221029/flight_computer.csv",
+        {"gx": "deg/s", "ax": "g"},
+        time_unit="ms",
+    )
 
 
 def main() -> int:
@@ -106,6 +116,8 @@ def main() -> int:
             continue
         started = time.perf_counter()
         try:
+            if isinstance(values, bc.InputError):
+                raise values
             fit = bc.fit_noise(values, rate, unit=unit, channel=name, seed=0)
         except bc.BayescalError as error:
             print(f"| {label} | {name} | refused: {error} | | | | | |")

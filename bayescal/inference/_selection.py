@@ -126,8 +126,12 @@ class _Families:
 def laplace_log_evidence(problem: NoiseProblem, mode: Mode) -> float:
     """The Laplace approximation of log p(y | model) at the MAP ``mode`` (module docstring);
     minus infinity when the MAP did not converge or its Hessian is not positive definite."""
+    # An optimiser that ran off (a Hessian of NaN) has no evidence: asked for it, slogdet
+    # prints a RuntimeWarning on the user's terminal.
+    if not mode.converged or not np.all(np.isfinite(mode.hessian)):
+        return -math.inf
     sign, log_det = np.linalg.slogdet(mode.hessian)
-    if not mode.converged or sign <= 0:
+    if sign <= 0:
         return -math.inf
     prior = problem.prior
     z = (mode.theta - prior.location) / prior.scale

@@ -116,3 +116,34 @@ def test_a_signal_ends_the_run_cleanly(tmp_path, sent, code, word):
     assert process.returncode == code, stderr
     assert stderr.strip() == f"bayescal noise: {word}; no output written"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.csv"]
+
+
+class _RaisesWhenCollected:
+    """What a signal does to a callback Python runs without letting it raise (JAX's garbage
+    collector hook, a ``__del__``): the handler's exception is swallowed there."""
+
+    def __init__(self, exception):
+        self.exception = exception
+
+    def __del__(self):
+        raise self.exception
+
+
+def test_a_signal_swallowed_by_a_callback_prints_no_traceback(monkeypatch):
+    """The run says a swallowed signal in one line (it records it); Python's "Exception ignored
+    in ..." report of it is silenced while the run lasts, and only for those exceptions: the
+    hook in place before (Python's printer; pytest's here) gets every other one."""
+    import sys
+
+    from bayescal.cli._main import _signals_unwind
+
+    reported = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda report: reported.append(report.exc_value))
+    with _signals_unwind():
+        _RaisesWhenCollected(KeyboardInterrupt())
+        bug = ValueError("a real bug")
+        _RaisesWhenCollected(bug)
+    assert reported == [bug]
+    interrupt = KeyboardInterrupt()
+    _RaisesWhenCollected(interrupt)
+    assert reported == [bug, interrupt]

@@ -79,19 +79,28 @@ def _signals_unwind():
     raise (a garbage-collector hook of JAX's, a ``__del__``) is lost as an exception, so the
     block checks the list before it lets its outputs be written."""
     received: list[int] = []
+    hook_before = sys.unraisablehook
 
     def handler(signum, frame):
         received.append(signum)
         raise _RAISED[signum]
+
+    def unraisable(report):
+        # Python prints "Exception ignored in ..." and a traceback for the exception such a
+        # callback swallows; ours is recorded above and said in one line, so it stays silent.
+        if not isinstance(report.exc_value, tuple(_RAISED.values())):
+            hook_before(report)
 
     try:
         previous = {signum: signal.signal(signum, handler) for signum in _RAISED}
     except ValueError:  # not the main thread: leave signals to whoever owns them
         yield received
         return
+    sys.unraisablehook = unraisable
     try:
         yield received
     finally:
+        sys.unraisablehook = hook_before
         for signum, handler_before in previous.items():
             signal.signal(signum, handler_before)
 

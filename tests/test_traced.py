@@ -72,3 +72,19 @@ def test_without_the_variable_nothing_is_written(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert float(_traced.persistent_jit(_weighted_norm)(np.float64(2.0), np.ones(3), 2.0)) == 6.0
     assert not list(tmp_path.iterdir())
+
+
+def test_a_function_with_captured_values_is_computed_but_never_stored(folder):
+    """Two closures share one qualified name and capture different powers: keyed by the name,
+    the second would be served the first's trace."""
+
+    def power_of(power):
+        return lambda vector: jnp.sum(vector**power)
+
+    def apply(function, vector):
+        return function(vector)
+
+    cached = _traced.persistent_jit(apply)
+    assert float(cached(power_of(2), np.arange(3.0))) == 5.0
+    assert float(cached(power_of(3), np.arange(3.0))) == 9.0
+    assert not list(folder.iterdir())

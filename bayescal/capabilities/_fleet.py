@@ -224,7 +224,8 @@ def _refuse_unstreamed(task: RecordingTask) -> None:
         raise InputError(
             f"{given[0]} does not apply to a long recording, which is streamed (read in blocks)",
             source=task.path,
-            fix="give the file a header and leave it out, or split the recording",
+            fix="leave it out: a streamed file is a Parquet file or a text table with a "
+            "header line",
         )
 
 

@@ -62,8 +62,12 @@ def persistent_jit(fun: Callable) -> Callable:
 
 
 def _token(leaf) -> str | None:
-    """A stable description of a static leaf, or None when it has none."""
+    """A stable description of a static leaf, or None when it has none. A function is named
+    by its module and qualified name only when that name is unique to it: a nested function
+    or a lambda may capture different values under one name."""
     if callable(leaf) and hasattr(leaf, "__qualname__"):
+        if "<locals>" in leaf.__qualname__ or "<lambda>" in leaf.__qualname__:
+            return None
         return f"{leaf.__module__}.{leaf.__qualname__}"
     if leaf is None or isinstance(leaf, (bool, int, float, str)):
         return repr(leaf)

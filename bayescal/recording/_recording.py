@@ -556,11 +556,21 @@ def _check_time_order(time, place: _Place, source, column):
         )
 
 
+_EVEN_STEPS = 1e-6
+"""Steps that differ by less than this part of the shortest are evenly spaced."""
+
+
 def _slope(index: np.ndarray, time: np.ndarray) -> float:
     """The least-squares slope of time against grid index (the sample period), its sums
     pairwise (np.sum): a BLAS dot product of millions of positive terms loses ~1e-12."""
     centred = index - index.mean()
     return float(np.sum(centred * (time - time.mean())) / np.sum(centred * centred))
+
+
+def _rate(period: float) -> float:
+    """The sample rate of a fitted period, to twelve digits: a fitted period carries float
+    noise that would print as 100.00000000000003."""
+    return float(f"{1.0 / period:.12g}")
 
 
 def gap_error(step: float, periods: float, where: str, source, column) -> InputError:
@@ -588,7 +598,14 @@ def _grid_positions(relative_time, window, place: _Place, source, column, gaps, 
     # Steps within a quarter of the shortest of each other sit on no grid coarser than a
     # quarter period (the one case the resolution changes below), and the sort that finds
     # their grid costs a third of a second at 10^7 samples.
-    regular = steps.max() - steps.min() < 0.25 * steps.min()
+    shortest, longest = steps.min(), steps.max()
+    if longest - shortest < _EVEN_STEPS * shortest:
+        # Every step the same to a part in 10^6 (a clock that counts samples, a simulation):
+        # every sample is on the grid, none is missing, and the search below would return
+        # exactly this index after a second pass over 10^7 stamps.
+        index = np.arange(time.size)
+        return index, _rate(_slope(index, time)), []
+    regular = longest - shortest < 0.25 * shortest
     # The resolution before the median reorders the steps in place.
     resolution = 0.0 if regular else _stamp_resolution(steps)
     period = float(np.median(steps, overwrite_input=True))
@@ -643,8 +660,7 @@ def _grid_positions(relative_time, window, place: _Place, source, column, gaps, 
     dropped = int(np.sum(jumps - 1))
     if dropped:
         notes.append(f"{dropped} missing sample(s) left out (not interpolated)")
-    # Twelve digits: a fitted period carries float noise that would print as 100.00000000000003.
-    return index, float(f"{1.0 / period:.12g}"), notes
+    return index, _rate(period), notes
 
 
 def _check_rate(rate, declared: bool, source, column) -> list[str]:

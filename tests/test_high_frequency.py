@@ -33,11 +33,11 @@ def test_default_noise_keeps_n_the_low_frequency_level(kind):
     90 % intervals' coverage over 100 records), the record's shape among the terms chosen,
     the model fits and its sampler passed; the classical three-term model, for contrast, is
     bent by the filtered records' high frequencies."""
-    values, _ = bench.simulate(kind, SAMPLES, seed=11)
+    values, shaped = bench.simulate(kind, SAMPLES, seed=11)
     fit = bc.fit_noise(values, bench.RATE, unit="deg/s", seed=0)
     n = fit.parameters["N"]
-    assert abs(n.mean / bench.N_TRUE - 1) < 0.05
-    assert abs(n.mean - bench.N_TRUE) < 3 * n.sd
+    assert abs(n.mean / shaped["N"] - 1) < 0.05
+    assert abs(n.mean - shaped["N"]) < 3 * n.sd
     assert fit.passed, fit.failures
     if SHAPE[kind]:
         assert SHAPE[kind] & set(fit.terms), fit.terms
@@ -45,7 +45,7 @@ def test_default_noise_keeps_n_the_low_frequency_level(kind):
         assert fit.lsb > 0 and fit.output_white_level > n.mean
     if kind == "butterworth_at_rate":
         classical = bench.classical_model_n(values, fit.classical.allan)
-        assert abs(classical / bench.N_TRUE - 1) > 0.2
+        assert abs(classical / shaped["N"] - 1) > 0.2
 
 
 def test_discovery_names_the_grid_and_never_outliers():

@@ -10,7 +10,7 @@ import numpy as np
 
 from .._errors import HealthCheckError, InputError
 from ..classical._noise import ClassicalNoise, classical_noise
-from ..inference._checks import posterior_checks
+from ..inference._checks import noise_model_checker
 from ..inference._noise_posterior import NoisePosterior, sample_noise
 from ..inference._priors import card_prior, default_prior
 from ..inference._selection import TermSelection, select_noise_terms
@@ -48,7 +48,7 @@ class NoiseFit:
     """The posterior itself (draws, diagnostics, the likelihood's data)."""
     checks: tuple = ()
     """The checks of the fitted model against the record (Allan deviation, spectrum in octave
-    bands, lag-1 autocorrelation: :func:`~bayescal.inference._checks.noise_model_checks`),
+    bands, lag-1 autocorrelation: :func:`~bayescal.inference._checks.noise_model_checker`),
     each with its place, p-value and whether it passed."""
     selection: TermSelection | None = None
     """How the terms were chosen (``terms="auto"``): every candidate with its Bayes factor
@@ -198,34 +198,57 @@ def noise_priors(
     return partial(card_prior, card, unit=unit, allan=classical.allan, require=False), ()
 
 
+@dataclass(frozen=True)
+class NoisePosteriorFit:
+    """A record's noise posterior (:func:`noise_posterior`) with how its terms were chosen
+    and how its MAP fits the record."""
+
+    posterior: NoisePosterior
+    selection: TermSelection | None
+    """How the terms were chosen (``terms="auto"``), else None."""
+    lsb: float
+    """The resolution the samples are rounded to (zero: none), channel unit."""
+    checks: tuple[dict, ...]
+    """The posterior-predictive checks of the MAP against the record
+    (:func:`~bayescal.inference._checks.noise_model_checker`)."""
+
+
 def noise_posterior(
     values: np.ndarray,
     rate_hz: float,
     *,
     terms,
     prior_of: Callable,
+    unit: str,
     level_values: np.ndarray | None = None,
+    allan=None,
     seed: int = 0,
     n_walkers: int = 32,
     max_steps: int = 40_000,
     progress: bool = False,
-) -> tuple[NoisePosterior, TermSelection | None, float]:
+) -> NoisePosteriorFit:
     """The posterior of the noise model of ``values`` (NaN: a gap), with its terms chosen by
-    evidence when ``terms`` is ``"auto"`` and the grid the samples sit on (its rounding a known
-    floor): (posterior, selection or None, LSB). ``level_values`` are the samples whose level
-    the bias is (``values`` by default): what a calibration's static sections give."""
+    evidence among the models that fit when ``terms`` is ``"auto"`` and the grid the samples
+    sit on (its rounding a known floor), and its checks. ``level_values`` are the samples
+    whose level the bias is (``values`` by default): what a calibration's static sections
+    give; ``allan``: the Allan deviation of ``values`` at octave taus when already computed."""
     lsb = discrete_step(values)
     spectral = spectral_summary(values, rate_hz)
     level = level_summary(values if level_values is None else level_values, rate_hz)
+    checker = noise_model_checker(spectral, values, unit, allan)
     selection = None
     if terms == AUTO:
-        selection = select_noise_terms(spectral, level, prior_of, lsb=lsb)
+
+        def misfit(model) -> str:
+            return "; ".join(check["misfit"] for check in checker(model) if not check["passed"])
+
+        selection = select_noise_terms(spectral, level, prior_of, lsb=lsb, misfit=misfit)
         terms = selection.terms
     problem = NoiseProblem(spectral, level, prior_of(terms), lsb=np.asarray(lsb))
     fit = sample_noise(
         problem, terms=terms, seed=seed, n_walkers=n_walkers, max_steps=max_steps, progress=progress
     )
-    return fit, selection, lsb
+    return NoisePosteriorFit(fit, selection, lsb, tuple(checker(fit.model_at_map())))
 
 
 def fit_noise(
@@ -310,11 +333,14 @@ def fit_noise(
         raise InputError(error.problem, source=source, column=channel, fix=error.fix) from None
     family = ("white", *CANDIDATE_TERMS) if terms == AUTO else terms
     prior_of, prior_notes = noise_priors(family, classical, unit, sensor, sensor_fallback)
-    fit, selection, lsb = noise_posterior(
+    posterior = noise_posterior(
         values,
         rate_hz,
         terms=terms,
         prior_of=prior_of,
+        unit=unit,
+        # The classical Allan deviation at octave taus is the one the checks read: not again.
+        allan=classical.allan if isinstance(taus, str) and taus == "octave" else None,
         seed=seed,
         n_walkers=n_walkers,
         max_steps=max_steps,
@@ -325,18 +351,10 @@ def fit_noise(
         unit=unit,
         rate_hz=rate_hz,
         classical=classical,
-        fit=fit,
-        # The classical Allan deviation at octave taus is the one the check reads: not again.
-        checks=tuple(
-            posterior_checks(
-                fit,
-                values,
-                unit,
-                classical.allan if isinstance(taus, str) and taus == "octave" else None,
-            )
-        ),
-        selection=selection,
-        lsb=lsb,
+        fit=posterior.posterior,
+        checks=posterior.checks,
+        selection=posterior.selection,
+        lsb=posterior.lsb,
         source=source,
         notes=(*notes, *prior_notes),
     )

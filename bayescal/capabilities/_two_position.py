@@ -15,7 +15,6 @@ from .._errors import HealthCheckError
 from ..classical._allan import allan_deviation
 from ..classical._gravity import LocalGravity
 from ..classical._two_position import Section, check_sections, classical_two_position
-from ..inference._checks import posterior_checks
 from ..inference._noise_posterior import NoisePosterior
 from ..inference._priors import default_prior
 from ..inference._selection import TermSelection
@@ -35,7 +34,7 @@ class BayesianTwoPosition:
     noise: NoisePosterior
     checks: tuple = ()
     """The noise model's checks against the two sections (Allan deviation, spectrum, lag-1
-    autocorrelation: :func:`~bayescal.inference._checks.noise_model_checks`)."""
+    autocorrelation: :func:`~bayescal.inference._checks.noise_model_checker`)."""
     selection: TermSelection | None = None
     """How the noise terms were chosen (``terms="auto"``)."""
 
@@ -60,16 +59,17 @@ def bayesian_two_position(
     """Joint posterior of scale, offset and g_local; ``gap_s`` is the time between the
     starts of the sections when it is known (one file)."""
     joined = np.concatenate([up.values, [np.nan], down.values])
-    noise, selection, lsb = noise_posterior(
+    fitted = noise_posterior(
         joined,
         rate_hz,
         terms=terms,
         prior_of=partial(default_prior, allan=allan_deviation(joined, rate_hz)),
+        unit=unit,
         level_values=up.values,
         seed=seed,
         progress=progress,
     )
-    checks = tuple(posterior_checks(noise, joined, unit))
+    noise, selection, lsb, checks = fitted.posterior, fitted.selection, fitted.lsb, fitted.checks
     rounding = lsb**2 / (12.0 * rate_hz)
     rng = np.random.default_rng(seed + 1)
 

@@ -10,6 +10,7 @@ when its p-value is below ``CHECK_LEVEL``.
 """
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 from scipy import fft, stats
@@ -61,18 +62,21 @@ def dominant_exponent(noise: dict, tau, gauss_markov_s: float = 0.0) -> list[int
     return exponents[np.argmax(values, axis=0)].tolist()
 
 
-def allan_check(residual, rate_hz: float, unit: str, model_variance, exponents, allan=None) -> dict:
+def allan_check(
+    residual, rate_hz: float, unit: str, model_variance, exponents, allan=None, count=None
+) -> dict:
     """The measured overlapping Allan deviation of ``residual`` against the model's band:
     ``model_variance(tau)`` its Allan variance, ``exponents(tau)`` the noise type it says
     dominates at each tau. The band is the model's: its EDF for that noise type, not for a type
     identified from the data (unreliable from a few long averages). ``allan``: that deviation
-    at octave taus when already computed (a long record's costs a pass over it)."""
+    at octave taus, and ``count`` the residual's present samples, when already known (a long
+    record's each cost a pass over it)."""
     if allan is None:
         allan = allan_deviation(residual, rate_hz, "octave")
     usable = np.isfinite(allan.deviation)
     tau, deviation = allan.tau[usable], allan.deviation[usable]
     predicted = model_variance(tau)
-    n_phase = finite_moments(residual)[0] + 1
+    n_phase = (finite_moments(residual)[0] if count is None else count) + 1
     edf = np.array(
         [
             equivalent_degrees_of_freedom(
@@ -392,7 +396,11 @@ def lag_one_check(values, autocovariance: np.ndarray) -> dict:
     the model's, ``autocovariance`` its increments' autocovariance at lags 0, 1, 2 ...;
     standard error by Bartlett's formula from the model's autocorrelations. ``values``: an
     array or a spooled series."""
-    sums = _increment_sums(values)
+    return _lag_one(_increment_sums(values), autocovariance)
+
+
+def _lag_one(sums: dict, autocovariance: np.ndarray) -> dict:
+    """:func:`lag_one_check` from the increments' sums (:func:`_increment_sums`)."""
     mean = sums["sum"] / sums["count"]
     observed = float(
         (sums["pair_products"] - mean * sums["pair_sum"] + mean**2 * sums["pairs"])
@@ -416,46 +424,50 @@ def lag_one_check(values, autocovariance: np.ndarray) -> dict:
     }
 
 
-def noise_model_checks(model, summary, values, unit: str, allan=None) -> list[dict]:
-    """The checks of a fitted stationary noise model (a :class:`~bayescal.NoiseModel` at the
-    posterior's MAP) against its record: the Allan deviation within the model's predictive
-    band, the spectrum in octave bands, the increments' lag-1 autocorrelation. Each says where
-    it failed and by how much; a check fails only where the departure is both significant
-    (Bonferroni p < CHECK_LEVEL) and material (beyond the tolerances above): a model that fits
-    a long record to a few percent is a model that fits."""
+def noise_model_checker(summary, values, unit: str, allan=None) -> Callable[..., list[dict]]:
+    """model -> the checks of a stationary noise model (a :class:`~bayescal.NoiseModel`, at a
+    posterior's MAP) against ``values``, its record (``summary`` their spectral summary,
+    ``allan`` their Allan deviation at octave taus when already computed): the Allan deviation
+    within the model's predictive band, the spectrum in octave bands, the increments' lag-1
+    autocorrelation. Each says where it failed and by how much; a check fails only where the
+    departure is both significant (Bonferroni p < CHECK_LEVEL) and material (beyond the
+    tolerances above): a model that fits a long record to a few percent is a model that fits.
+
+    Made for checking many models of one record (the term search): what the checks read of
+    the record (its Allan deviation, sample count and increments' sums) is read once, here,
+    not once per model (a pass over a long spooled record each)."""
     from ..models._whittle import expected_power
 
-    expected = np.asarray(expected_power(summary, *model.whittle_weights(summary.node_frequency)))
-    expected = expected / summary.count
-    ratio = summary.power / expected
-    noise = {"N": model.N, "B": model.B, "K": model.K, "Q": model.Q, "R": model.R}
-    autocovariance = model.increment_autocovariance(np.arange(64))
-    checks = [
-        allan_check(
-            values,
-            model.rate_hz,
-            unit,
-            lambda tau: np.asarray(model.allan_variance(tau)),
-            lambda tau: dominant_exponent(noise, tau),
-            allan,
-        ),
-        spectrum_check(summary, ratio, expected),
-        lag_one_check(values, autocovariance),
-    ]
-    for check in checks:
-        material = _material(check)
-        check["passed"] = bool(check["p_value"] >= CHECK_LEVEL or not material)
-        check["misfit"] = "" if check["passed"] else material
-    return checks
+    rate_hz = summary.rate_hz
+    if allan is None:
+        allan = allan_deviation(values, rate_hz, "octave")
+    count = finite_moments(values)[0]
+    increments = _increment_sums(values)
 
+    def check(model) -> list[dict]:
+        weights = model.whittle_weights(summary.node_frequency)
+        expected = np.asarray(expected_power(summary, *weights)) / summary.count
+        noise = {"N": model.N, "B": model.B, "K": model.K, "Q": model.Q, "R": model.R}
+        checks = [
+            allan_check(
+                values,
+                rate_hz,
+                unit,
+                lambda tau: np.asarray(model.allan_variance(tau)),
+                lambda tau: dominant_exponent(noise, tau),
+                allan,
+                count,
+            ),
+            spectrum_check(summary, summary.power / expected, expected),
+            _lag_one(increments, model.increment_autocovariance(np.arange(64))),
+        ]
+        for one in checks:
+            material = _material(one)
+            one["passed"] = bool(one["p_value"] >= CHECK_LEVEL or not material)
+            one["misfit"] = "" if one["passed"] else material
+        return checks
 
-def posterior_checks(posterior, values, unit: str, allan=None) -> list[dict]:
-    """:func:`noise_model_checks` of a noise posterior (:class:`NoisePosterior`) at its MAP,
-    against the values it was fitted to (``allan``: their Allan deviation at octave taus,
-    when already computed)."""
-    return noise_model_checks(
-        posterior.model_at_map(), posterior.problem.spectral, values, unit, allan
-    )
+    return check
 
 
 def _material(check: dict) -> str:

@@ -31,13 +31,14 @@ def noise_model(problem: NoiseProblem, values: dict) -> NoiseModel:
     broadcast, except a low-pass filter's, which are numbers), with the record's LSB."""
     noise = {name: values[name] for name in ("N", "B", "K", "Q", "R", "F") if name in values}
     lowpass = None
-    if problem.shape == "decimation":
+    # A model of the term search whose filter is masked off passes everything.
+    if problem.shape == "decimation" and "filter_length" in values:
         lowpass = OutputFilter(
             shape="decimation",
             length=float(values["filter_length"]),
             stages=float(values["filter_stages"]),
         )
-    elif problem.shape == "butterworth":
+    elif problem.shape == "butterworth" and "filter_cutoff" in values:
         lowpass = OutputFilter(
             shape="butterworth",
             cutoff_hz=float(values["filter_cutoff"]),

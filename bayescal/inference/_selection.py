@@ -233,9 +233,10 @@ def select_noise_terms(
 
 
 def _until_it_fits(families, model, candidates, misfit, gain) -> tuple[frozenset, dict]:
-    """``model`` with the fewest left-out terms that make it fit, and for each term added
-    the misfit without it: at each step the term of the largest evidence whose model fits,
-    or, where none fits alone, the term of the largest evidence when it adds some. A model
+    """``model`` with left-out terms added, one at a time, until it fits, and for each term
+    added the misfit without it. Greedy, not the fewest terms: at each step the term of the
+    largest evidence whose model fits or, where none fits alone, the term of the largest
+    evidence when it adds some. A model
     that still misfits when no term is left gives way to ``model`` as the evidence chose it:
     its misfit is then reported, not patched by terms that do not mend it."""
     chosen, added = model, {}

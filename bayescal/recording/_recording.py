@@ -595,9 +595,6 @@ def _grid_positions(relative_time, window, place: _Place, source, column, gaps, 
 
     time = relative_time[window] - relative_time[window][0]
     steps = np.diff(time)
-    # Steps within a quarter of the shortest of each other sit on no grid coarser than a
-    # quarter period (the one case the resolution changes below), and the sort that finds
-    # their grid costs a third of a second at 10^7 samples.
     shortest, longest = steps.min(), steps.max()
     if longest - shortest < _EVEN_STEPS * shortest:
         # Every step the same to a part in 10^6 (a clock that counts samples, a simulation):
@@ -605,6 +602,9 @@ def _grid_positions(relative_time, window, place: _Place, source, column, gaps, 
         # exactly this index after a second pass over 10^7 stamps.
         index = np.arange(time.size)
         return index, _rate(_slope(index, time)), []
+    # Steps within a quarter of the shortest of each other sit on no grid coarser than a
+    # quarter period (the one case the resolution changes below), and the sort that finds
+    # their grid costs a third of a second at 10^7 samples.
     regular = longest - shortest < 0.25 * shortest
     # The resolution before the median reorders the steps in place.
     resolution = 0.0 if regular else _stamp_resolution(steps)

@@ -20,8 +20,13 @@ _SPEC.loader.exec_module(bench)
 
 SAMPLES = 2**15
 SHAPE = {
-    "butterworth": {"butterworth_filter", "decimation_filter", "output_filter"},
-    "butterworth_at_rate": {"butterworth_filter", "decimation_filter", "output_filter"},
+    "butterworth": {"butterworth_filter", "decimation_filter", "output_filter", "biquad_filter"},
+    "butterworth_at_rate": {
+        "butterworth_filter",
+        "decimation_filter",
+        "output_filter",
+        "biquad_filter",
+    },
     "white_angle": {"quantization"},
     "quantization": set(),
 }
@@ -69,3 +74,18 @@ def test_discovery_names_the_output_filter():
     assert "output_filter" in names and "outliers" not in names
     spectrum = next(check for check in found.checks if check.name == "spectrum_bands")
     assert not spectrum.passed_before and spectrum.passed_after
+
+
+def test_a_filter_shape_that_bends_n_gives_way_to_the_biquad():
+    """A second-order Butterworth at 1 kHz read at 200 Hz: the one-tap filter wins the
+    evidence, not decisively, with N 4 % high and a 0.8 % sd; its N is many sds from the
+    biquad's (Hausman), so the biquad is kept, says why, and its interval covers the truth."""
+    values, shaped = bench.simulate("butterworth", 2**14, seed=0)
+    fit = bc.fit_noise(values, bench.RATE, unit="deg/s", seed=0)
+    trials = {trial.term: trial for trial in fit.selection.trials}
+    assert trials["biquad_filter"].kept
+    assert "Hausman" in trials["biquad_filter"].reason
+    assert 0 < trials["output_filter"].log_bayes_factor < fit.selection.threshold
+    n = fit.parameters["N"]
+    assert n.q05 <= shaped["N"] <= n.q95
+    assert fit.passed, fit.failures

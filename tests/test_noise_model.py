@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import bayescal as bc
+from bayescal.models.effects.output_filter import OutputFilter
 
 RATE = 100.0
 N_SAMPLES = 2**14
@@ -19,6 +20,9 @@ TERMS = {
     "rate_ramp": dict(R=1e-4),
     "output_filter": dict(N=0.01, F=0.4),
     "all": dict(N=0.01, K=2e-4, B=1e-3, Q=1e-4, R=1e-6, F=-0.2),
+    "biquad_filter": dict(
+        N=0.01, lowpass=OutputFilter(shape="biquad", poles=(-0.6, 0.3), zeros=(0.7, 0.5))
+    ),
 }
 
 
@@ -54,3 +58,21 @@ def test_same_key_same_samples_and_bias_is_the_start():
 def test_rejects_a_non_positive_rate():
     with pytest.raises(ValueError, match="rate_hz"):
         bc.NoiseModel(rate_hz=0.0)
+
+
+def test_a_biquad_is_the_second_order_section_scipy_filters_with():
+    """The biquad's |H|^2 from its reflection coefficients against scipy's frequency response
+    of the same section (a digital Butterworth at the output rate, its double zero at Nyquist
+    moved just inside the unit circle), normalised to unit gain at zero frequency."""
+    from scipy import signal
+
+    _, a = signal.butter(2, 30.0, fs=RATE)
+    b = np.poly([-0.999, -0.999])  # the Butterworth's (1 + z^-1)^2, its zeros inside
+    lowpass = OutputFilter(
+        shape="biquad", poles=(a[1] / (1 + a[2]), a[2]), zeros=(b[1] / (1 + b[2]), b[2])
+    )
+    nu = np.linspace(0.0, 0.49, 50)
+    _, response = signal.freqz(b, a, worN=nu * RATE, fs=RATE)
+    expected = np.abs(response) ** 2 / np.abs(response[0]) ** 2
+    np.testing.assert_allclose(np.asarray(lowpass.gain(nu, RATE)), expected, rtol=1e-9, atol=1e-15)
+    assert OutputFilter.from_values("biquad", lowpass.values).values == lowpass.values

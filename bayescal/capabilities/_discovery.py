@@ -588,7 +588,7 @@ def _high_band_deficit(checks: list[dict], rate_hz: float) -> bool:
 
 def decide_output_filter(context: Context, baseline: tuple[str, ...]):
     """The sensor's output filter, when the baseline's spectrum misfits: the shape (one-tap,
-    decimation, Butterworth) the record holds decisive evidence for, chosen by Laplace
+    decimation, Butterworth, biquad) the record holds decisive evidence for, chosen by Laplace
     evidence among every stationary term (:func:`select_noise_terms`), with its MAP
     parameters and their Laplace 90 % intervals; None when no shape is decisive. Its
     shape is then fixed for the search (its uncertainty is second order for the effects that
@@ -612,15 +612,7 @@ def decide_output_filter(context: Context, baseline: tuple[str, ...]):
     shape = FILTER_SHAPE_OF_TERM[chosen[0]]
     estimates = selection.estimates
     names = ("F",) if shape == "one_tap" else LOWPASS_PARAMETERS[shape]
-    fields = {
-        "F": "coefficient",
-        "filter_length": "length",
-        "filter_stages": "stages",
-        "filter_cutoff": "cutoff_hz",
-        "filter_order": "order",
-        "filter_warping": "warping",
-    }
-    effect = OutputFilter(shape=shape, **{fields[name]: estimates[name][0] for name in names})
+    effect = OutputFilter.from_values(shape, {name: estimates[name][0] for name in names})
     parameters = {"shape": {"value": shape}}
     for name in names:
         value, sd = estimates[name]

@@ -280,11 +280,11 @@ def fit_noise(
         ``"auto"`` (the default): white noise and every candidate term the record holds
         decisive evidence for — bias instability, rate random walk, rate ramp, white angle
         noise (quantization) and the output filter in one of its shapes (one-tap, decimation,
-        Butterworth) — chosen as :func:`~bayescal.inference.select_noise_terms` describes
+        Butterworth, biquad) — chosen as :func:`~bayescal.inference.select_noise_terms` describes
         and reported in :attr:`NoiseFit.selection`. Or the terms themselves: white,
         bias_instability, rate_random_walk, quantization, rate_ramp, output_filter,
-        decimation_filter, butterworth_filter (aliases such as ``rrw`` and ``all`` as on the
-        command line).
+        decimation_filter, butterworth_filter, biquad_filter (aliases such as ``rrw`` and
+        ``all`` as on the command line).
     sensor : str or SensorCard, optional
         A sensor card (``bayescal sensors``) whose datasheet figures become priors.
     seed : int

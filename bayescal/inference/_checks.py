@@ -73,9 +73,13 @@ def allan_check(
     record's each cost a pass over it)."""
     if allan is None:
         allan = allan_deviation(residual, rate_hz, "octave")
-    usable = np.isfinite(allan.deviation)
-    tau, deviation = allan.tau[usable], allan.deviation[usable]
-    predicted = model_variance(tau)
+    finite = np.isfinite(allan.deviation)
+    predicted = np.full(allan.tau.shape, np.nan)
+    predicted[finite] = model_variance(allan.tau[finite])
+    # A model whose Allan variance is not positive at a tau (a shaped white noise's numerical
+    # integral where the shape nearly cancels itself) says nothing testable there.
+    usable = finite & (predicted > 0)
+    tau, deviation, predicted = allan.tau[usable], allan.deviation[usable], predicted[usable]
     n_phase = (finite_moments(residual)[0] if count is None else count) + 1
     edf = np.array(
         [

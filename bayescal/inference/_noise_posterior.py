@@ -13,7 +13,8 @@ from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from ..models._level import bias_given_noise
 from ..models._noise_model import NoiseModel
 from ..models._noise_problem import NoiseProblem
-from ..models.effects.output_filter import OutputFilter
+from ..models._terms import LOWPASS_PARAMETERS
+from ..models.effects.output_filter import REFLECTION_FLOOR, OutputFilter
 from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
 from ._optimize import Mode, maximum_a_posteriori
 
@@ -30,21 +31,10 @@ def noise_model(problem: NoiseProblem, values: dict) -> NoiseModel:
     """The :class:`NoiseModel` of ``problem`` at parameter ``values`` (natural units; arrays
     broadcast, except a low-pass filter's, which are numbers), with the record's LSB."""
     noise = {name: values[name] for name in ("N", "B", "K", "Q", "R", "F") if name in values}
-    lowpass = None
+    shape = problem.shape
     # A model of the term search whose filter is masked off passes everything.
-    if problem.shape == "decimation" and "filter_length" in values:
-        lowpass = OutputFilter(
-            shape="decimation",
-            length=float(values["filter_length"]),
-            stages=float(values["filter_stages"]),
-        )
-    elif problem.shape == "butterworth" and "filter_cutoff" in values:
-        lowpass = OutputFilter(
-            shape="butterworth",
-            cutoff_hz=float(values["filter_cutoff"]),
-            order=float(values["filter_order"]),
-            warping=float(values["filter_warping"]),
-        )
+    present = shape is not None and LOWPASS_PARAMETERS[shape][0] in values
+    lowpass = OutputFilter.from_values(shape, values) if present else None
     return NoiseModel(
         rate_hz=problem.spectral.rate_hz, **noise, lowpass=lowpass, lsb=float(problem.lsb)
     )
@@ -173,6 +163,9 @@ def _slope(name: str, values: dict, rate_hz: float, prior) -> float:
         return values[name] * (1.0 - 2.0 * values[name] / rate_hz)
     if name == "filter_warping":
         return values[name] * (1.0 - values[name])
+    if name.startswith(("filter_pole", "filter_zero")):
+        k = values[name]
+        return (k - REFLECTION_FLOOR) * (1.0 - k) / (1.0 - REFLECTION_FLOOR)
     return values[name]  # a log coordinate
 
 

@@ -23,6 +23,7 @@ from .._errors import InputError
 from ..classical._allan import DeviationResult
 from ..models._noise_problem import PRIOR_LOG_SD, NoisePrior
 from ..models._terms import term_parameters
+from ..models.effects.output_filter import reflection_coordinate
 from ..recording._sensor_cards import SensorCard
 
 RAMP_PRIOR_FACTOR = 10.0
@@ -38,6 +39,13 @@ FILTER_PRIORS = {
     "filter_order": (0.0, 1.0),
     # logit kappa: between a filter at the output rate (1) and one far faster (0).
     "filter_warping": (0.0, 2.0),
+    # A biquad's reflection coefficients (coordinates: output_filter.reflection): a flat
+    # section (k = 0) at the centre, 95 % within -0.9 < k < 0.9991, near enough the unit
+    # circle for a Butterworth's zeros at Nyquist.
+    **dict.fromkeys(
+        ("filter_pole_k1", "filter_pole_k2", "filter_zero_k1", "filter_zero_k2"),
+        (reflection_coordinate(0.0), 2.0),
+    ),
 }
 """(location, sd) of the normal prior of each low-pass coordinate
 (:func:`bayescal.models.effects.output_filter.lowpass_natural`)."""

@@ -12,7 +12,9 @@ Search: forward from white noise (the rounding floor of a gridded record include
 known), adding at each step the candidate with the largest Bayes factor while that factor is
 decisive (log BF >= log 100, Jeffreys' scale; the bar discovery uses too); then backward,
 dropping any kept term whose Bayes factor against the model without it fell below the bar.
-The output filter's shapes (one-tap, decimation, Butterworth) compete for one place.
+The output filter's shapes (one-tap, decimation, Butterworth, biquad) compete for one place:
+the chosen model's filter finally takes the shape of the largest evidence beside its other
+terms.
 
 Fit: evidence alone is not enough. A term whose trace lies in the few lowest bins of a short
 record (a bias instability under a white floor, 25 minutes long) wins less than log 100 from
@@ -218,18 +220,81 @@ def select_noise_terms(
     for term in sorted(model & set(candidates)):  # backward: each kept term still decisive?
         if families.log_evidence(model) - families.log_evidence(model - {term}) < threshold:
             model = model - {term}
-    kept_for_fit = {}
+    model = _best_shape(model, candidates, gain)
+    model, reasons = _shape_n_does_not_bend(families, model, candidates, threshold)
     if misfit is not None:
         model, kept_for_fit = _until_it_fits(families, model, candidates, misfit, gain)
+        reasons |= {
+            term: f"kept for the fit (log BF {{factor:.1f}}): without it, {misfit_without}"
+            for term, misfit_without in kept_for_fit.items()
+        }
     return TermSelection(
         terms=tuple(t for t in ALL_TERMS if t in model),
-        trials=tuple(
-            _trial(families, model, t, threshold, kept_for_fit.get(t, "")) for t in candidates
-        ),
+        trials=tuple(_trial(families, model, t, threshold, reasons.get(t, "")) for t in candidates),
         log_evidence=families.log_evidence(model),
         estimates=families.estimates(model),
         threshold=threshold,
     )
+
+
+def _best_shape(model: frozenset, candidates, gain) -> frozenset:
+    """``model`` with its output filter in the shape of the largest evidence. The shapes are
+    one term, not rivals for a place to be won decisively: the first shape the forward search
+    took was the best beside the terms it had then, and the terms it took later (a rounding
+    floor, a slow term) can favour another."""
+    if not model & set(FILTER_SHAPE_OF_TERM):
+        return model
+    shapes = {t: gain(model, t) for t in candidates if t in FILTER_SHAPE_OF_TERM and t not in model}
+    best = max(shapes, key=shapes.get, default=None)
+    return _with(model, best) if best is not None and shapes[best] > 0 else model
+
+
+SHAPE_TEST_Z = 2.576
+"""|z| of the difference in N between the chosen filter shape and the biquad beyond which the
+shape is taken to bend N (two-sided p < 0.01, the checks' level)."""
+
+
+def _shape_n_does_not_bend(
+    families, model: frozenset, candidates, threshold: float
+) -> tuple[frozenset, dict]:
+    """``model`` with its output filter a biquad where the shape the evidence chose moves N.
+
+    A filter shape with fewer parameters can win the evidence (the Occam factor of the
+    biquad's four) while it misshapes the band below the cutoff, where N is read, by a few
+    percent: within the fit checks' materiality, yet many of N's sds (a second-order
+    Butterworth run at 1 kHz, read at 200 Hz: a one-tap filter won, N 4 % high with a 0.8 %
+    sd). The biquad holds the one-tap filter and a Butterworth at the output rate, and comes
+    near the others; where the chosen shape is right, both estimate N alike, and the biquad's
+    sd is the larger. Hausman's test (1978): z = (N_chosen - N_biquad) / sqrt(sd_biquad^2 -
+    sd_chosen^2), the variance of the difference of a consistent and an efficient estimator
+    under the simpler model; beyond :data:`SHAPE_TEST_Z` the biquad is kept, and says why.
+    Only between shapes the evidence does not tell apart decisively: where it does, the
+    biquad is not the consistent one."""
+    chosen = next((t for t in model if t in FILTER_SHAPE_OF_TERM), None)
+    flexible = "biquad_filter"
+    if chosen in (None, flexible) or flexible not in candidates:
+        return model, {}
+    rival = _with(model, flexible)
+    # The test needs the biquad consistent, which it is only where it holds the truth: a
+    # shape the evidence prefers decisively (a decimation filter's sinc^2, whose zeros a
+    # second-order section cannot all place) is not one the biquad may overrule.
+    margin = families.log_evidence(model) - families.log_evidence(rival)
+    if not margin < threshold:
+        return model, {}
+    (n_chosen, sd_chosen), (n_rival, sd_rival) = (
+        families.estimates(terms)["N"] for terms in (model, rival)
+    )
+    spread = sd_rival**2 - sd_chosen**2
+    if not spread > 0:
+        return model, {}
+    z = (n_chosen - n_rival) / math.sqrt(spread)
+    if abs(z) <= SHAPE_TEST_Z:
+        return model, {}
+    reason = (
+        f"kept (log BF {{factor:.1f}}): with {chosen} in its place N is {n_chosen / n_rival:.3f}x "
+        f"this shape's, z = {z:+.1f} (Hausman): that shape bends N"
+    )
+    return rival, {flexible: reason}
 
 
 def _until_it_fits(families, model, candidates, misfit, gain) -> tuple[frozenset, dict]:
@@ -242,7 +307,8 @@ def _until_it_fits(families, model, candidates, misfit, gain) -> tuple[frozenset
     chosen, added = model, {}
     problem = misfit(families.model(model))
     while problem:
-        gains = {t: gain(model, t) for t in candidates if t not in model and _fits_in(model, t)}
+        # A filter's other shapes too: the shape the evidence chose may be the misfit.
+        gains = {t: gain(model, t) for t in candidates if t not in model}
         ranked = sorted((t for t in gains if math.isfinite(gains[t])), key=gains.get, reverse=True)
         if not ranked:
             return chosen, {}
@@ -270,20 +336,22 @@ def _with(model: frozenset, term: str) -> frozenset:
 
 
 def _trial(
-    families: _Families, model: frozenset, term: str, threshold: float, misfit_without: str
+    families: _Families, model: frozenset, term: str, threshold: float, why_kept: str
 ) -> TermTrial:
     bar = f"log {math.exp(threshold):.0f}"
     chosen = families.log_evidence(model)
     if term in model:
         factor = chosen - families.log_evidence(model - {term})
-        if misfit_without:
-            reason = f"kept for the fit (log BF {factor:.1f}): without it, {misfit_without}"
+        if why_kept:
+            reason = why_kept.format(factor=factor)
         else:
             reason = f"kept: log BF {factor:.1f} >= {bar} against the model without it"
         return TermTrial(term, factor, True, reason)
     factor = families.log_evidence(_with(model, term)) - chosen
     rival = next((t for t in model if t in FILTER_SHAPE_OF_TERM), None)
-    if rival is not None and term in FILTER_SHAPE_OF_TERM:
+    if rival is not None and term in FILTER_SHAPE_OF_TERM and factor > 0:
+        reason = f"left out for {rival} (log BF {factor:.1f} for this shape), which N does not bend"
+    elif rival is not None and term in FILTER_SHAPE_OF_TERM:
         reason = f"left out: {rival} fits better (log BF {-factor:.1f} against this shape)"
     elif not math.isfinite(factor):
         reason = "left out: its fit did not converge"

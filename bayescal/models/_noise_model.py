@@ -98,8 +98,9 @@ class NoiseModel(eqx.Module):
     F : float
         One-tap output filter coefficient in (-1, 1), dimensionless.
     lowpass : OutputFilter, optional
-        The sensor's low-pass output filter (shape "decimation" or "butterworth"), unit gain
-        at zero frequency: it shapes the white noise, so N stays the low-frequency density.
+        The sensor's low-pass output filter (shape "decimation", "butterworth" or "biquad"),
+        unit gain at zero frequency: it shapes the white noise, so N stays the low-frequency
+        density.
     lsb : float
         The output's resolution, U: the samples are rounded to multiples of it (zero: not
         rounded).
@@ -134,7 +135,7 @@ class NoiseModel(eqx.Module):
             raise ValueError(f"F={self.F!r}: the output filter coefficient lies in (-1, 1)")
         if self.lowpass is not None and (self.lowpass.shape == "one_tap" or _present(self.F)):
             raise ValueError(
-                "lowpass: a decimation or Butterworth OutputFilter, and F = 0 beside it "
+                "lowpass: a decimation, Butterworth or biquad OutputFilter, and F = 0 beside it "
                 "(one output filter shape at a time)"
             )
         if isinstance(self.lsb, (int, float)) and not self.lsb >= 0:

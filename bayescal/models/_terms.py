@@ -14,12 +14,14 @@ from .._errors import InputError
 LOWPASS_PARAMETERS = {
     "decimation": ("filter_length", "filter_stages"),
     "butterworth": ("filter_cutoff", "filter_order", "filter_warping"),
+    "biquad": ("filter_pole_k1", "filter_pole_k2", "filter_zero_k1", "filter_zero_k2"),
 }
 """The low-pass output filter's shapes and their parameters (:mod:`.effects.output_filter`)."""
 FILTER_SHAPE_OF_TERM = {
     "output_filter": "one_tap",
     "decimation_filter": "decimation",
     "butterworth_filter": "butterworth",
+    "biquad_filter": "biquad",
 }
 """The output filter's terms, one per shape: a model holds at most one of them."""
 PARAMETERS_OF_TERM = {
@@ -28,6 +30,7 @@ PARAMETERS_OF_TERM = {
     "output_filter": ("F",),
     "decimation_filter": LOWPASS_PARAMETERS["decimation"],
     "butterworth_filter": LOWPASS_PARAMETERS["butterworth"],
+    "biquad_filter": LOWPASS_PARAMETERS["biquad"],
     "bias_instability": ("B",),
     "rate_random_walk": ("K",),
     "rate_ramp": ("R",),
@@ -62,6 +65,10 @@ TERM_ALIASES = {
     "butterworth_filter": "butterworth_filter",
     "butterworth": "butterworth_filter",
     "lowpass": "butterworth_filter",
+    "biquad_filter": "biquad_filter",
+    "biquad": "biquad_filter",
+    "second_order_section": "biquad_filter",
+    "sos": "biquad_filter",
 }
 AUTO = "auto"
 """Choose the terms by evidence (the default)."""
@@ -74,6 +81,7 @@ ALL_TERMS = (
     "output_filter",
     "decimation_filter",
     "butterworth_filter",
+    "biquad_filter",
     "bias_instability",
     "rate_random_walk",
     "rate_ramp",
@@ -87,6 +95,7 @@ CANDIDATE_TERMS = (
     "output_filter",
     "decimation_filter",
     "butterworth_filter",
+    "biquad_filter",
 )
 """The terms ``auto`` tries beside white noise (at most one output filter shape)."""
 
@@ -99,7 +108,7 @@ def parse_terms(spec: str) -> tuple[str, ...] | Literal["auto"]:
     if word == AUTO:
         return AUTO
     if word == "all":
-        return tuple(t for t in ALL_TERMS if t not in ("decimation_filter", "butterworth_filter"))
+        return tuple(t for t in ALL_TERMS if FILTER_SHAPE_OF_TERM.get(t, "one_tap") == "one_tap")
     terms = set()
     for word in spec.split(","):
         name = word.strip().lower()
@@ -109,8 +118,8 @@ def parse_terms(spec: str) -> tuple[str, ...] | Literal["auto"]:
             raise InputError(
                 f"--terms: unknown term '{word.strip()}'",
                 fix="choose from white, bias_instability, rate_random_walk, quantization, "
-                "rate_ramp, output_filter, decimation_filter, butterworth_filter (or rrw, "
-                "flicker, ramp, all, auto)",
+                "rate_ramp, output_filter, decimation_filter, butterworth_filter, biquad_filter "
+                "(or rrw, flicker, ramp, all, auto)",
             )
         terms.add(TERM_ALIASES[name])
     return check_terms(tuple(t for t in ALL_TERMS if t in terms))

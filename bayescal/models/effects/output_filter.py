@@ -18,6 +18,20 @@ the Allan curve reads (IEEE Std 952) whatever the filter does near Nyquist:
   one), whose response has no zero and falls at most 2n decades of power per decade of
   frequency. Records show either: a 1 kHz filter read at 200 Hz, or one read at its rate and
   rounded (the rounding fills its zero).
+- ``biquad``: a second-order section, |H|^2 = (|B(z)|^2 / B(1)^2) / (|A(z)|^2 / A(1)^2) with
+  A(z) = 1 + a1 z^-1 + a2 z^-2 and B likewise, each given by its two reflection coefficients
+  (k1, k2) in (-0.9, 1): a2 = k2, a1 = k1 (1 + k2), so that every value is a stable,
+  minimum-phase section. The floor at -0.9 keeps poles and zeros off z = 1: a section with
+  either near zero frequency has unit gain at f = 0 but a step just above it, a slow term in
+  disguise that would move the level the Allan curve reads (A(1) = (1 + k1)(1 + k2) >= 0.01:
+  a real pole at most 0.9, its corner above fs / 60; a second-order Butterworth's cutoff
+  above 0.074 fs, below which the ``butterworth`` shape holds it). It holds the one-tap
+  filter, a Butterworth at the output rate and, what neither the decimation nor the
+  Butterworth shape holds, a second-order filter running faster than the output and read
+  without a further anti-alias filter: decimating an ARMA
+  process keeps it ARMA, its poles raised to the decimation factor, and a second-order
+  Butterworth read at a fifth of its rate folds its tail back near Nyquist, flattening the
+  spectrum there (its derivative is zero at Nyquist, as every |H|^2 of cosines has).
 
 The two low-pass shapes multiply the white noise's spectrum (the expected periodogram at each
 bin's nodes, :func:`bayescal.models._whittle._bin_coefficients`): exact where the shape
@@ -43,14 +57,47 @@ LOWPASS_UNITS = {
     "filter_cutoff": "Hz",
     "filter_order": "1",
     "filter_warping": "1",
+    "filter_pole_k1": "1",
+    "filter_pole_k2": "1",
+    "filter_zero_k1": "1",
+    "filter_zero_k2": "1",
 }
+
+
+REFLECTION_FLOOR = -0.9
+"""The least reflection coefficient of a biquad (module docstring)."""
+
+
+def reflection(x):
+    """A biquad's reflection coefficient in (REFLECTION_FLOOR, 1) from its coordinate."""
+    return REFLECTION_FLOOR + (1.0 - REFLECTION_FLOOR) * jax.nn.sigmoid(x)
+
+
+def reflection_coordinate(k: float) -> float:
+    """The inverse of :func:`reflection`."""
+    return _logit((k - REFLECTION_FLOOR) / (1.0 - REFLECTION_FLOOR))
+
+
+def _section_power(k1, k2, nu):
+    """|C(e^(2 pi i nu))|^2 / C(1)^2 of C(z) = 1 + c1 z^-1 + c2 z^-2 given by its reflection
+    coefficients (k1, k2): c2 = k2, c1 = k1 (1 + k2)."""
+    c1, c2 = k1 * (1.0 + k2), k2
+    omega = 2.0 * jnp.pi * nu
+    power = 1.0 + c1 * c1 + c2 * c2 + 2.0 * c1 * (1.0 + c2) * jnp.cos(omega)
+    power = power + 2.0 * c2 * jnp.cos(2.0 * omega)
+    return power / (1.0 + c1 + c2) ** 2
 
 
 def lowpass_gain(shape: str, nu, coordinates):
     """|H|^2 of a low-pass shape at ``nu`` cycles per sample from its sampled coordinates:
     decimation (a, b): M = 1 + e^a, p = e^b; Butterworth (a, b, c): nu_c = sigmoid(a) / 2,
     n = 1 + e^b (a
-    Butterworth filter is at least first order), kappa = sigmoid(c) (module docstring)."""
+    Butterworth filter is at least first order), kappa = sigmoid(c); biquad (a, b, c, d): the
+    reflection coefficients :func:`reflection` of each, (a, b) of the poles, (c, d) of the
+    zeros (module docstring)."""
+    if shape == "biquad":
+        a, b, c, d = (reflection(x) for x in coordinates)
+        return _section_power(c, d, nu) / _section_power(a, b, nu)
     if shape == "decimation":
         a, b = coordinates
         length, stages = 1.0 + jnp.exp(a), jnp.exp(b)
@@ -64,6 +111,9 @@ def lowpass_gain(shape: str, nu, coordinates):
 
 def lowpass_natural(shape: str, coordinates, rate_hz: float) -> dict:
     """The shape's parameters in their units (samples, 1, Hz) from its coordinates."""
+    if shape == "biquad":
+        names = LOWPASS_PARAMETERS[shape]
+        return {name: reflection(x) for name, x in zip(names, coordinates, strict=True)}
     if shape == "decimation":
         a, b = coordinates
         return {"filter_length": 1.0 + jnp.exp(a), "filter_stages": jnp.exp(b)}
@@ -81,6 +131,8 @@ def _logit(fraction: float) -> float:
 
 def lowpass_coordinates(shape: str, values: dict, rate_hz: float) -> tuple[float, ...]:
     """The inverse of :func:`lowpass_natural`."""
+    if shape == "biquad":
+        return tuple(reflection_coordinate(values[name]) for name in LOWPASS_PARAMETERS[shape])
     if shape == "decimation":
         return math.log(values["filter_length"] - 1.0), math.log(values["filter_stages"])
     return (
@@ -90,13 +142,24 @@ def lowpass_coordinates(shape: str, values: dict, rate_hz: float) -> tuple[float
     )
 
 
+_FIELD = {
+    "filter_length": "length",
+    "filter_stages": "stages",
+    "filter_cutoff": "cutoff_hz",
+    "filter_order": "order",
+    "filter_warping": "warping",
+}
+"""The :class:`OutputFilter` field of each decimation and Butterworth parameter."""
+
+
 class OutputFilter(NoiseTerm):
     """The sensor's output filter (module docstring). As a noise term with the exact one-tap
     shape, it is the lag-one part of the filtered white noise, weight N^2 a b with (a, b) =
-    (1, F) / (1 + F); an instance with ``shape`` "decimation" or "butterworth" holds the
-    low-pass's parameters in their units (``length`` and ``stages``, or ``cutoff_hz``,
-    ``order`` and ``warping``). Left out, a model explains the fall of the spectrum toward
-    Nyquist with flicker or quantization, and bends N."""
+    (1, F) / (1 + F); an instance with ``shape`` "decimation", "butterworth" or "biquad" holds
+    the low-pass's parameters in their units (``length`` and ``stages``; ``cutoff_hz``,
+    ``order`` and ``warping``; the reflection coefficients ``poles`` and ``zeros``). Left
+    out, a model explains the fall of the spectrum toward Nyquist with flicker or
+    quantization, and bends N."""
 
     name: ClassVar[str] = "output_filter"
     explanation: ClassVar[str] = (
@@ -116,10 +179,20 @@ class OutputFilter(NoiseTerm):
     cutoff_hz: float = 0.0
     order: float = 0.0
     warping: float = 1e-3
+    poles: tuple[float, float] = (0.0, 0.0)
+    """The biquad's denominator A(z), as its reflection coefficients (k1, k2)."""
+    zeros: tuple[float, float] = (0.0, 0.0)
+    """The biquad's numerator B(z), as its reflection coefficients (k1, k2)."""
 
     def __check_init__(self):
         if self.shape not in ("one_tap", *LOWPASS_PARAMETERS):
-            raise ValueError(f"shape={self.shape!r}: one_tap, decimation or butterworth")
+            raise ValueError(f"shape={self.shape!r}: one_tap, decimation, butterworth or biquad")
+        if self.shape == "biquad" and not all(
+            REFLECTION_FLOOR < k < 1 for k in (*self.poles, *self.zeros)
+        ):
+            raise ValueError(
+                f"a biquad's reflection coefficients (poles, zeros) lie in ({REFLECTION_FLOOR}, 1)"
+            )
         if self.shape == "decimation" and not (self.length > 1 and self.stages > 0):
             raise ValueError("a decimation filter needs length > 1 sample and stages > 0")
         if self.shape == "butterworth" and not (
@@ -135,17 +208,32 @@ class OutputFilter(NoiseTerm):
         if self.shape == "one_tap":
             F = self.coefficient
             return (1 + F * F + 2 * F * jnp.cos(2 * jnp.pi * jnp.asarray(nu))) / (1 + F) ** 2
-        values = (
-            {"filter_length": self.length, "filter_stages": self.stages}
-            if self.shape == "decimation"
-            else {
-                "filter_cutoff": self.cutoff_hz,
-                "filter_order": self.order,
-                "filter_warping": self.warping,
-            }
-        )
-        coordinates = lowpass_coordinates(self.shape, values, rate_hz)
+        coordinates = lowpass_coordinates(self.shape, self.values, rate_hz)
         return lowpass_gain(self.shape, jnp.asarray(nu, dtype=float), coordinates)
+
+    @classmethod
+    def from_values(cls, shape: str, values: dict) -> "OutputFilter":
+        """The filter of ``shape`` from its parameters by name (``F`` for the one-tap shape,
+        those of :data:`~bayescal.models._terms.LOWPASS_PARAMETERS` for the others), as a
+        fit reports them."""
+        if shape == "one_tap":
+            return cls(coefficient=float(values["F"]))
+        named = {name: float(values[name]) for name in LOWPASS_PARAMETERS[shape]}
+        if shape == "biquad":
+            return cls(
+                shape=shape,
+                poles=(named["filter_pole_k1"], named["filter_pole_k2"]),
+                zeros=(named["filter_zero_k1"], named["filter_zero_k2"]),
+            )
+        return cls(shape=shape, **{_FIELD[name]: value for name, value in named.items()})
+
+    @property
+    def values(self) -> dict:
+        """The low-pass's parameters by name (the inverse of :meth:`from_values`)."""
+        if self.shape == "biquad":
+            names = LOWPASS_PARAMETERS["biquad"]
+            return dict(zip(names, (*self.poles, *self.zeros), strict=True))
+        return {name: getattr(self, _FIELD[name]) for name in LOWPASS_PARAMETERS[self.shape]}
 
     def apply(self, samples, rate_hz: float):
         """``samples`` (JAX, last axis time) through the low-pass, zero phase: each Fourier

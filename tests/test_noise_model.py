@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import bayescal as bc
-from bayescal.models.effects.output_filter import OutputFilter
+from bayescal.models.effects.output_filter import BIQUAD_RADIUS, OutputFilter, reflection
 
 RATE = 100.0
 N_SAMPLES = 2**14
@@ -63,16 +63,32 @@ def test_rejects_a_non_positive_rate():
 def test_a_biquad_is_the_second_order_section_scipy_filters_with():
     """The biquad's |H|^2 from its reflection coefficients against scipy's frequency response
     of the same section (a digital Butterworth at the output rate, its double zero at Nyquist
-    moved just inside the unit circle), normalised to unit gain at zero frequency."""
+    moved inside the biquad's radius), normalised to unit gain at zero frequency."""
     from scipy import signal
 
+    def reflections(c):  # the inverse of c2 = rho^2 k2, c1 = rho k1 (1 + k2)
+        k2 = c[2] / BIQUAD_RADIUS**2
+        return c[1] / (BIQUAD_RADIUS * (1 + k2)), k2
+
     _, a = signal.butter(2, 30.0, fs=RATE)
-    b = np.poly([-0.999, -0.999])  # the Butterworth's (1 + z^-1)^2, its zeros inside
-    lowpass = OutputFilter(
-        shape="biquad", poles=(a[1] / (1 + a[2]), a[2]), zeros=(b[1] / (1 + b[2]), b[2])
-    )
+    b = np.poly([-0.899, -0.899])  # the Butterworth's (1 + z^-1)^2, its zeros inside
+    lowpass = OutputFilter(shape="biquad", poles=reflections(a), zeros=reflections(b))
     nu = np.linspace(0.0, 0.49, 50)
     _, response = signal.freqz(b, a, worN=nu * RATE, fs=RATE)
     expected = np.abs(response) ** 2 / np.abs(response[0]) ** 2
     np.testing.assert_allclose(np.asarray(lowpass.gain(nu, RATE)), expected, rtol=1e-9, atol=1e-15)
     assert OutputFilter.from_values("biquad", lowpass.values).values == lowpass.values
+
+
+def test_no_biquad_has_a_pole_or_zero_near_zero_frequency():
+    """Over coordinates as far out as the prior reaches (sd 1.5, here up to 6 sd), every
+    section's roots lie within the radius: a pole near z = 1 would be a slow term (a
+    Gauss-Markov process) disguised as the output filter."""
+    k1, k2 = (
+        np.asarray(reflection(x))
+        for x in jax.random.uniform(jax.random.key(0), (2, 2000), minval=-9.0, maxval=9.0)
+    )
+    c1, c2 = BIQUAD_RADIUS * k1 * (1 + k2), BIQUAD_RADIUS**2 * k2
+    radius = np.abs(np.stack([np.roots([1.0, a, b]) for a, b in zip(c1, c2, strict=True)]))
+    assert radius.max() <= BIQUAD_RADIUS + 1e-12
+    assert radius.max() > 0.99 * BIQUAD_RADIUS  # the bound is reached, not a narrower one

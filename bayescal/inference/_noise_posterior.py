@@ -14,7 +14,7 @@ from ..models._level import bias_given_noise
 from ..models._noise_model import NoiseModel
 from ..models._noise_problem import NoiseProblem
 from ..models._terms import LOWPASS_PARAMETERS
-from ..models.effects.output_filter import REFLECTION_FLOOR, OutputFilter
+from ..models.effects.output_filter import OutputFilter
 from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
 from ._optimize import Mode, maximum_a_posteriori
 
@@ -164,8 +164,7 @@ def _slope(name: str, values: dict, rate_hz: float, prior) -> float:
     if name == "filter_warping":
         return values[name] * (1.0 - values[name])
     if name.startswith(("filter_pole", "filter_zero")):
-        k = values[name]
-        return (k - REFLECTION_FLOOR) * (1.0 - k) / (1.0 - REFLECTION_FLOOR)
+        return 1.0 - values[name] ** 2  # k = tanh(coordinate)
     return values[name]  # a log coordinate
 
 

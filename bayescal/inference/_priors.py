@@ -39,12 +39,12 @@ FILTER_PRIORS = {
     "filter_order": (0.0, 1.0),
     # logit kappa: between a filter at the output rate (1) and one far faster (0).
     "filter_warping": (0.0, 2.0),
-    # A biquad's reflection coefficients (coordinates: output_filter.reflection): a flat
-    # section (k = 0) at the centre, 95 % within -0.9 < k < 0.9991, near enough the unit
-    # circle for a Butterworth's zeros at Nyquist.
+    # A biquad's reflection coefficients (coordinates: atanh k, output_filter.reflection): a
+    # flat section (k = 0) at the centre, 95 % within |k| < 0.995, near enough the radius
+    # bound for a pair of poles or zeros on it.
     **dict.fromkeys(
         ("filter_pole_k1", "filter_pole_k2", "filter_zero_k1", "filter_zero_k2"),
-        (reflection_coordinate(0.0), 2.0),
+        (reflection_coordinate(0.0), 1.5),
     ),
 }
 """(location, sd) of the normal prior of each low-pass coordinate

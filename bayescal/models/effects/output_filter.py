@@ -19,19 +19,21 @@ the Allan curve reads (IEEE Std 952) whatever the filter does near Nyquist:
   frequency. Records show either: a 1 kHz filter read at 200 Hz, or one read at its rate and
   rounded (the rounding fills its zero).
 - ``biquad``: a second-order section, |H|^2 = (|B(z)|^2 / B(1)^2) / (|A(z)|^2 / A(1)^2) with
-  A(z) = 1 + a1 z^-1 + a2 z^-2 and B likewise, each given by its two reflection coefficients
-  (k1, k2) in (-0.9, 1): a2 = k2, a1 = k1 (1 + k2), so that every value is a stable,
-  minimum-phase section. The floor at -0.9 keeps poles and zeros off z = 1: a section with
-  either near zero frequency has unit gain at f = 0 but a step just above it, a slow term in
-  disguise that would move the level the Allan curve reads (A(1) = (1 + k1)(1 + k2) >= 0.01:
-  a real pole at most 0.9, its corner above fs / 60; a second-order Butterworth's cutoff
-  above 0.074 fs, below which the ``butterworth`` shape holds it). It holds the one-tap
-  filter, a Butterworth at the output rate and, what neither the decimation nor the
-  Butterworth shape holds, a second-order filter running faster than the output and read
-  without a further anti-alias filter: decimating an ARMA
-  process keeps it ARMA, its poles raised to the decimation factor, and a second-order
-  Butterworth read at a fifth of its rate folds its tail back near Nyquist, flattening the
-  spectrum there (its derivative is zero at Nyquist, as every |H|^2 of cosines has).
+  A(z) = 1 + a1 z^-1 + a2 z^-2 and B likewise, each given by two reflection coefficients
+  (k1, k2) in (-1, 1) and scaled to the radius rho = 0.9: a2 = rho^2 k2, a1 = rho k1 (1 + k2),
+  so that every value is a stable, minimum-phase section whose poles and zeros all lie within
+  0.9 of the origin. The radius keeps them off z = 1: a pole or zero near zero frequency gives
+  unit gain at f = 0 but a step just above it, a slow term in disguise (a pole at 0.99 beside
+  one at -0.89 is a Gauss-Markov process) that would move the level the Allan curve reads. A
+  real pole of 0.9 has its corner at fs / 60, a second-order Butterworth of radius 0.9 its
+  cutoff at fs / 40; below those the ``butterworth`` shape holds the filter, and a digital
+  Butterworth's zeros at Nyquist too. The biquad holds the one-tap filter and, what neither
+  the decimation nor the Butterworth shape holds, a second-order filter running faster than
+  the output and read without a further anti-alias filter: decimating an ARMA process keeps
+  it ARMA, its poles raised to the decimation factor (so well inside the radius), and a
+  second-order Butterworth read at a fifth of its rate folds its tail back near Nyquist,
+  flattening the spectrum there (its derivative is zero at Nyquist, as every |H|^2 of cosines
+  has).
 
 The two low-pass shapes multiply the white noise's spectrum (the expected periodogram at each
 bin's nodes, :func:`bayescal.models._whittle._bin_coefficients`): exact where the shape
@@ -64,24 +66,24 @@ LOWPASS_UNITS = {
 }
 
 
-REFLECTION_FLOOR = -0.9
-"""The least reflection coefficient of a biquad (module docstring)."""
+BIQUAD_RADIUS = 0.9
+"""The largest radius of a biquad's poles and zeros (module docstring)."""
 
 
 def reflection(x):
-    """A biquad's reflection coefficient in (REFLECTION_FLOOR, 1) from its coordinate."""
-    return REFLECTION_FLOOR + (1.0 - REFLECTION_FLOOR) * jax.nn.sigmoid(x)
+    """A biquad's reflection coefficient in (-1, 1) from its coordinate: tanh."""
+    return jnp.tanh(x)
 
 
 def reflection_coordinate(k: float) -> float:
     """The inverse of :func:`reflection`."""
-    return _logit((k - REFLECTION_FLOOR) / (1.0 - REFLECTION_FLOOR))
+    return math.atanh(k)
 
 
 def _section_power(k1, k2, nu):
     """|C(e^(2 pi i nu))|^2 / C(1)^2 of C(z) = 1 + c1 z^-1 + c2 z^-2 given by its reflection
-    coefficients (k1, k2): c2 = k2, c1 = k1 (1 + k2)."""
-    c1, c2 = k1 * (1.0 + k2), k2
+    coefficients (k1, k2) at the radius rho: c2 = rho^2 k2, c1 = rho k1 (1 + k2)."""
+    c1, c2 = BIQUAD_RADIUS * k1 * (1.0 + k2), BIQUAD_RADIUS**2 * k2
     omega = 2.0 * jnp.pi * nu
     power = 1.0 + c1 * c1 + c2 * c2 + 2.0 * c1 * (1.0 + c2) * jnp.cos(omega)
     power = power + 2.0 * c2 * jnp.cos(2.0 * omega)
@@ -180,19 +182,17 @@ class OutputFilter(NoiseTerm):
     order: float = 0.0
     warping: float = 1e-3
     poles: tuple[float, float] = (0.0, 0.0)
-    """The biquad's denominator A(z), as its reflection coefficients (k1, k2)."""
+    """The biquad's denominator A(z), as its reflection coefficients (k1, k2) at the radius
+    :data:`BIQUAD_RADIUS`."""
     zeros: tuple[float, float] = (0.0, 0.0)
-    """The biquad's numerator B(z), as its reflection coefficients (k1, k2)."""
+    """The biquad's numerator B(z), as its reflection coefficients (k1, k2) at the radius
+    :data:`BIQUAD_RADIUS`."""
 
     def __check_init__(self):
         if self.shape not in ("one_tap", *LOWPASS_PARAMETERS):
             raise ValueError(f"shape={self.shape!r}: one_tap, decimation, butterworth or biquad")
-        if self.shape == "biquad" and not all(
-            REFLECTION_FLOOR < k < 1 for k in (*self.poles, *self.zeros)
-        ):
-            raise ValueError(
-                f"a biquad's reflection coefficients (poles, zeros) lie in ({REFLECTION_FLOOR}, 1)"
-            )
+        if self.shape == "biquad" and not all(-1 < k < 1 for k in (*self.poles, *self.zeros)):
+            raise ValueError("a biquad's reflection coefficients (poles, zeros) lie in (-1, 1)")
         if self.shape == "decimation" and not (self.length > 1 and self.stages > 0):
             raise ValueError("a decimation filter needs length > 1 sample and stages > 0")
         if self.shape == "butterworth" and not (

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import bayescal as bc
-from bayescal.models.effects.output_filter import BIQUAD_RADIUS, OutputFilter, reflection
+from bayescal.models.effects.output_filter import BIQUAD_RADIUS, OutputFilter, lowpass_gain
 
 RATE = 100.0
 N_SAMPLES = 2**14
@@ -82,13 +82,14 @@ def test_a_biquad_is_the_second_order_section_scipy_filters_with():
 
 def test_no_biquad_has_a_pole_or_zero_near_zero_frequency():
     """Over coordinates as far out as the prior reaches (sd 1.5, here up to 6 sd), every
-    section's roots lie within the radius: a pole near z = 1 would be a slow term (a
-    Gauss-Markov process) disguised as the output filter."""
-    k1, k2 = (
-        np.asarray(reflection(x))
-        for x in jax.random.uniform(jax.random.key(0), (2, 2000), minval=-9.0, maxval=9.0)
-    )
-    c1, c2 = BIQUAD_RADIUS * k1 * (1 + k2), BIQUAD_RADIUS**2 * k2
-    radius = np.abs(np.stack([np.roots([1.0, a, b]) for a, b in zip(c1, c2, strict=True)]))
-    assert radius.max() <= BIQUAD_RADIUS + 1e-12
-    assert radius.max() > 0.99 * BIQUAD_RADIUS  # the bound is reached, not a narrower one
+    section is flat near zero frequency: within 1 % of unit gain at fs / 1000. A pole near
+    z = 1 (a Gauss-Markov process disguised as the output filter) would step there: one at
+    0.99 loses 28 % of the power at fs / 1000. And the radius is reached (a section with a
+    pole pair on it drops by a factor of ten or more within the band)."""
+    coordinates = tuple(np.random.default_rng(0).uniform(-9.0, 9.0, (4, 20_000)))
+    near_zero = np.asarray(lowpass_gain("biquad", 1e-3, coordinates))
+    assert np.max(np.abs(near_zero - 1.0)) < 0.01
+    assert BIQUAD_RADIUS <= 0.9
+    nu = np.linspace(0.01, 0.5, 50)[:, None]
+    lowest = np.asarray(lowpass_gain("biquad", nu, coordinates)).min()
+    assert lowest < 0.1

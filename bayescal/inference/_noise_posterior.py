@@ -157,7 +157,7 @@ def _slope(name: str, values: dict, rate_hz: float, prior) -> float:
         return float(prior.ramp_scale)
     if name == "F":
         return values["F"] * (1.0 - values["F"])
-    if name == "filter_length":
+    if name in ("filter_length", "filter_order"):  # 1 + e^coordinate
         return values[name] - 1.0
     if name == "filter_cutoff":
         return values[name] * (1.0 - 2.0 * values[name] / rate_hz)

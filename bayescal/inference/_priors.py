@@ -7,7 +7,9 @@ deviation of ``PRIOR_LOG_SD`` in the logarithm (a factor 55); R is normal around
 longest tau; the one-tap output filter's logit F is normal around F = 0.2 (sd 1.5); a
 low-pass output filter's coordinates are normal (:data:`FILTER_PRIORS`: a decimation filter
 of 3 samples and one stage, a Butterworth filter of order 2 at a quarter of the sample rate,
-each within a wide range); the bias is flat.
+a biquad flat at the centre with its reflection coefficients free over (-1, 1), each within a
+wide range); the bias is flat. Where a biquad's poles and zeros coincide the filter is flat
+whatever they are: there the prior alone places them, and N is unaffected.
 
 From a sensor card (:mod:`bayescal.recording._sensor_cards`), each datasheet figure becomes a
 log-normal centred on it with a standard deviation of log 3 in the logarithm: datasheets quote
@@ -40,7 +42,7 @@ FILTER_PRIORS = {
     # logit kappa: between a filter at the output rate (1) and one far faster (0).
     "filter_warping": (0.0, 2.0),
     # A biquad's reflection coefficients (coordinates: atanh k, output_filter.reflection): a
-    # flat section (k = 0) at the centre, 95 % within |k| < 0.995, near enough the radius
+    # flat section (k = 0) at the centre, 95 % within |k| < 0.994, near enough the radius
     # bound for a pair of poles or zeros on it.
     **dict.fromkeys(
         ("filter_pole_k1", "filter_pole_k2", "filter_zero_k1", "filter_zero_k2"),

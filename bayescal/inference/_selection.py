@@ -263,13 +263,16 @@ def _shape_n_does_not_bend(
     biquad's four) while it misshapes the band below the cutoff, where N is read, by a few
     percent: within the fit checks' materiality, yet many of N's sds (a second-order
     Butterworth run at 1 kHz, read at 200 Hz: a one-tap filter won, N 4 % high with a 0.8 %
-    sd). The biquad holds the one-tap filter and a Butterworth at the output rate, and comes
-    near the others; where the chosen shape is right, both estimate N alike, and the biquad's
-    sd is the larger. Hausman's test (1978): z = (N_chosen - N_biquad) / sqrt(sd_biquad^2 -
-    sd_chosen^2), the variance of the difference of a consistent and an efficient estimator
-    under the simpler model; beyond :data:`SHAPE_TEST_Z` the biquad is kept, and says why.
-    Only between shapes the evidence does not tell apart decisively: where it does, the
-    biquad is not the consistent one."""
+    sd). The biquad holds the one-tap filter (F up to 0.9) and a second-order filter read
+    below its rate, and comes near the others: a digital Butterworth at the output rate only
+    to its radius (its zeros at Nyquist within 0.9 of the origin, a notch 25 dB deep, not an
+    infinite one), so there the test assumes what holds only nearly. Where the chosen shape
+    is right, both estimate N alike, and the biquad's sd is the larger. Hausman's test
+    (1978): z = (N_chosen - N_biquad) / sqrt(sd_biquad^2 - sd_chosen^2), the variance of
+    the difference of a consistent and an efficient estimator under the simpler model;
+    beyond :data:`SHAPE_TEST_Z` the biquad is kept, and says why. Only between shapes the
+    evidence does not tell apart decisively: where it does, the biquad is not the
+    consistent one."""
     chosen = next((t for t in model if t in FILTER_SHAPE_OF_TERM), None)
     flexible = "biquad_filter"
     if chosen in (None, flexible) or flexible not in candidates:

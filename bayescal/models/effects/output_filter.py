@@ -1,7 +1,7 @@
 """The sensor's output filter: the digital low-pass most MEMS parts apply before decimating,
 which shapes the white noise (../shared/DESIGN.md, ``output_filter``).
 
-Three shapes, each with unit gain at zero frequency, so that N stays the low-frequency density
+Four shapes, each with unit gain at zero frequency, so that N stays the low-frequency density
 the Allan curve reads (IEEE Std 952) whatever the filter does near Nyquist:
 
 - ``one_tap``: (1 + F z^-1) / (1 + F), one coefficient F in (-1, 1) — a mild smoothing (the
@@ -35,7 +35,7 @@ the Allan curve reads (IEEE Std 952) whatever the filter does near Nyquist:
   flattening the spectrum there (its derivative is zero at Nyquist, as every |H|^2 of cosines
   has).
 
-The two low-pass shapes multiply the white noise's spectrum (the expected periodogram at each
+The three low-pass shapes multiply the white noise's spectrum (the expected periodogram at each
 bin's nodes, :func:`bayescal.models._whittle._bin_coefficients`): exact where the shape
 varies slowly over the taper's spectral window (a few Fourier frequencies), which it does. A
 rounding floor (the samples' LSB, :mod:`.quantization`) comes after the filter and is not
@@ -229,7 +229,9 @@ class OutputFilter(NoiseTerm):
 
     @property
     def values(self) -> dict:
-        """The low-pass's parameters by name (the inverse of :meth:`from_values`)."""
+        """The filter's parameters by name (the inverse of :meth:`from_values`)."""
+        if self.shape == "one_tap":
+            return {"F": self.coefficient}
         if self.shape == "biquad":
             names = LOWPASS_PARAMETERS["biquad"]
             return dict(zip(names, (*self.poles, *self.zeros), strict=True))

@@ -86,6 +86,7 @@ def test_a_filter_shape_that_bends_n_gives_way_to_the_biquad():
     assert trials["biquad_filter"].kept
     assert "Hausman" in trials["biquad_filter"].reason
     assert 0 < trials["output_filter"].log_bayes_factor < fit.selection.threshold
+    assert trials["output_filter"].reason.endswith("it bends N")
     n = fit.parameters["N"]
     assert n.q05 <= shaped["N"] <= n.q95
     assert fit.passed, fit.failures

@@ -228,6 +228,8 @@ def select_noise_terms(
             term: f"kept for the fit (log BF {{factor:.1f}}): without it, {misfit_without}"
             for term, misfit_without in kept_for_fit.items()
         }
+        # The fit may have swapped a shape back: a reason holds only for where its term is.
+        reasons = {t: r for t, r in reasons.items() if (t in model) == r.startswith("kept")}
     return TermSelection(
         terms=tuple(t for t in ALL_TERMS if t in model),
         trials=tuple(_trial(families, model, t, threshold, reasons.get(t, "")) for t in candidates),
@@ -293,11 +295,12 @@ def _shape_n_does_not_bend(
     z = (n_chosen - n_rival) / math.sqrt(spread)
     if abs(z) <= SHAPE_TEST_Z:
         return model, {}
-    reason = (
+    kept = (
         f"kept (log BF {{factor:.1f}}): with {chosen} in its place N is {n_chosen / n_rival:.3f}x "
         f"this shape's, z = {z:+.1f} (Hausman): that shape bends N"
     )
-    return rival, {flexible: reason}
+    left_out = f"left out for {flexible} (log BF {{factor:.1f}} for this shape): it bends N"
+    return rival, {flexible: kept, chosen: left_out}
 
 
 def _until_it_fits(families, model, candidates, misfit, gain) -> tuple[frozenset, dict]:
@@ -341,6 +344,8 @@ def _with(model: frozenset, term: str) -> frozenset:
 def _trial(
     families: _Families, model: frozenset, term: str, threshold: float, why_kept: str
 ) -> TermTrial:
+    """The trial of ``term`` against the chosen ``model``; ``why_kept``, a reason the search
+    gave for keeping it or leaving it out, with ``{factor}`` for its log Bayes factor."""
     bar = f"log {math.exp(threshold):.0f}"
     chosen = families.log_evidence(model)
     if term in model:
@@ -352,8 +357,11 @@ def _trial(
         return TermTrial(term, factor, True, reason)
     factor = families.log_evidence(_with(model, term)) - chosen
     rival = next((t for t in model if t in FILTER_SHAPE_OF_TERM), None)
-    if rival is not None and term in FILTER_SHAPE_OF_TERM and factor > 0:
-        reason = f"left out for {rival} (log BF {factor:.1f} for this shape), which N does not bend"
+    if why_kept:  # a reason the search gave (a shape that bends N)
+        reason = why_kept.format(factor=factor)
+    elif rival is not None and term in FILTER_SHAPE_OF_TERM and factor > 0:
+        # The fit-mending search added terms after the shapes were weighed.
+        reason = f"left out: {rival} holds the filter's place (log BF {factor:.1f} for this shape)"
     elif rival is not None and term in FILTER_SHAPE_OF_TERM:
         reason = f"left out: {rival} fits better (log BF {-factor:.1f} against this shape)"
     elif not math.isfinite(factor):

@@ -103,34 +103,13 @@ class RecordingFailure:
     message: str
 
 
-def _bias_moments(problem, draws: dict):
-    """Mean and sd of the bias given the noise at each posterior draw (flat prior): the
-    Gaussian the noise fit draws the bias from (:func:`bayescal.models._level.
-    bias_given_noise`), kept whole instead of one draw of it. The spectral weights come from
-    the draws' natural values (a low-pass filter shapes the spectrum, not these weights)."""
-    import jax.numpy as jnp
-
-    from ..models._components import component_weights
-    from ..models._level import bias_given_noise
-
-    noise = {
-        name: jnp.asarray(np.ravel(draws[name]))
-        for name in ("N", "B", "K", "Q", "F")
-        if name in draws
-    }
-    variances = component_weights(**noise).at[..., 0].add(problem.rounding)
-    ramp = jnp.asarray(np.ravel(draws["R"])) if "R" in draws else 0.0
-    mean, variance = bias_given_noise(problem.level, variances, ramp)
-    return np.asarray(mean), np.sqrt(np.asarray(variance))
-
-
 def recording_draws(fit, task: RecordingTask, seconds: float) -> RecordingDraws:
     """What the population needs of a :class:`~bayescal.NoiseFit`."""
     problem = fit.fit.problem
     prior = problem.prior
     fitted = [p for p in ("N", "B", "K") if p in problem.parameters]
     index = {p: problem.parameters.index(p) for p in fitted}
-    bias_mean, bias_sd = _bias_moments(problem, fit.draws)
+    bias_mean, bias_sd = (np.ravel(value) for value in fit.fit.bias_conditional)
     diagnostics = fit.diagnostics
     return RecordingDraws(
         source=fit.source,

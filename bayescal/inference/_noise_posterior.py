@@ -58,6 +58,10 @@ class NoisePosterior(eqx.Module):
     diagnostics: Diagnostics
     draws: dict
     """name -> (walkers, draws) posterior draws, bias included."""
+    bias_conditional: tuple[np.ndarray, np.ndarray]
+    """(mean, sd), each (walkers, draws): the Gaussian of the bias given the noise at each
+    draw, from which its draw was taken (kept whole: a fleet's population integrates the bias
+    out with it)."""
     log_posterior: np.ndarray
     """(walkers, draws) log posterior density of each draw."""
     pointwise_log_likelihood: np.ndarray
@@ -81,14 +85,15 @@ class NoisePosterior(eqx.Module):
 
 @eqx.filter_jit
 def _draw_quantities(problem: NoiseProblem, kept, key):
-    """Parameter values, bias draws (from its Gaussian conditional) and the pointwise
-    log-likelihood for each kept posterior draw."""
+    """Parameter values, bias draws (from its Gaussian conditional, whose mean and sd are
+    returned too) and the pointwise log-likelihood for each kept posterior draw."""
     natural = problem.natural(kept)
     mean, variance = bias_given_noise(problem.level, problem.variances(kept), problem.ramp(kept))
-    natural["bias"] = mean + jnp.sqrt(variance) * jax.random.normal(key, mean.shape)
+    sd = jnp.sqrt(variance)
+    natural["bias"] = mean + sd * jax.random.normal(key, mean.shape)
     pointwise = jax.vmap(jax.vmap(problem.pointwise_log_likelihood))(kept)
     log_posterior = jax.vmap(jax.vmap(problem.log_posterior))(kept)
-    return natural, pointwise, log_posterior
+    return natural, (mean, sd), pointwise, log_posterior
 
 
 @eqx.filter_jit
@@ -121,7 +126,7 @@ def sample_noise(
         progress,
     )
     diagnostics, kept = diagnose(sampler, problem.parameters, converged, estimate.converged)
-    natural, pointwise, log_posterior = _draw_quantities(
+    natural, bias_conditional, pointwise, log_posterior = _draw_quantities(
         problem, jnp.asarray(kept), jax.random.PRNGKey(int(rng.integers(2**31)))
     )
     natural = {name: np.asarray(value) for name, value in natural.items()}
@@ -141,6 +146,7 @@ def sample_noise(
         parameters=summaries,
         diagnostics=diagnostics,
         draws=natural,
+        bias_conditional=tuple(np.asarray(value) for value in bias_conditional),
         log_posterior=np.asarray(log_posterior),
         pointwise_log_likelihood=np.asarray(pointwise),
         map_theta=estimate.theta,

@@ -114,6 +114,55 @@ def test_a_term_the_evidence_leaves_out_is_kept_where_the_fit_needs_it():
     assert "Allan deviation" in kept["bias_instability"].reason
 
 
+def test_a_term_the_evidence_rejects_is_never_taken_on_to_mend_a_check():
+    """The fit-mending search's rule, on its own: the chosen model misfits, and the one term
+    that would mend it is a filter shape the evidence rejects decisively (log BF -151 against
+    the shape in place, as on a Butterworth record at its output rate whose chance
+    low-frequency excess a decimation shape hid with N 8.8 % high). It is not taken on: the
+    model stays as the evidence chose it and its misfit is reported; a term of small,
+    negative evidence that mends the fit still is."""
+    from bayescal.inference._selection import _until_it_fits
+
+    class Families:
+        def model(self, terms):
+            return terms
+
+    chosen = frozenset({"white", "butterworth_filter"})
+    gains = {"decimation_filter": -151.0, "rate_random_walk": -0.7, "quantization": -2.6}
+
+    def gain(model, term):
+        return gains[term]
+
+    def misfit_unless(mender):
+        return lambda model: "" if mender in model else "an excess at 0.05-0.1 Hz"
+
+    threshold = np.log(100.0)
+    candidates = tuple(gains)
+    model, added = _until_it_fits(
+        Families(), chosen, candidates, misfit_unless("decimation_filter"), gain, threshold
+    )
+    assert model == chosen and added == {}
+    model, added = _until_it_fits(
+        Families(), chosen, candidates, misfit_unless("rate_random_walk"), gain, threshold
+    )
+    assert model == chosen | {"rate_random_walk"}
+    assert added == {"rate_random_walk": "an excess at 0.05-0.1 Hz"}
+
+
+def test_an_allan_check_with_nothing_to_test_says_so():
+    """A model whose Allan variance is nowhere positive (nothing measured to set beside it):
+    the check is untested and passes, and names no misfit, instead of failing on an empty
+    array."""
+    from bayescal.inference._checks import _material, allan_check
+
+    residual = np.random.default_rng(0).normal(size=64)
+    check = allan_check(
+        residual, 100.0, "deg/s", lambda tau: -np.ones_like(tau), lambda tau: [0] * len(tau)
+    )
+    assert "untested" in check["location"] and check["curve"]["tau_s"] == []
+    assert check["p_value"] == 1.0 and _material(check) == ""
+
+
 def test_term_names():
     assert parse_terms("white,rrw") == ("white", "rate_random_walk")
     assert parse_terms("all") == (

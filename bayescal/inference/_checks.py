@@ -79,6 +79,15 @@ def allan_check(
     # A model whose Allan variance is not positive at a tau (a shaped white noise's numerical
     # integral where the shape nearly cancels itself) says nothing testable there.
     usable = finite & (predicted > 0)
+    if not usable.any():  # a record too short for one measured tau: nothing to test
+        return {
+            "name": "allan_deviation",
+            "statistic": math.nan,
+            "p_value": 1.0,
+            "location": {"untested": "no tau with a measured Allan deviation and a model's"},
+            "unit": unit,
+            "curve": {"tau_s": [], "adev": [], "model_low": [], "model_high": []},
+        }
     tau, deviation, predicted = allan.tau[usable], allan.deviation[usable], predicted[usable]
     n_phase = (finite_moments(residual)[0] if count is None else count) + 1
     edf = np.array(
@@ -480,13 +489,18 @@ def _material(check: dict) -> str:
     location = check["location"]
     match check["name"]:
         case "allan_deviation":
+            if "untested" in location:
+                return ""
             ratio = location["adev_over_model"]
             if abs(ratio - 1) <= ADEV_TOLERANCE:
                 return ""
-            where = location.get("tau_range_s", [location["tau_s"]] * 2)
+            low, high = location.get("tau_range_s", [location["tau_s"]] * 2)
+            span = (
+                f" (departing over {low:.3g}-{high:.3g} s)" if f"{low:.3g}" != f"{high:.3g}" else ""
+            )
             return (
                 f"the measured Allan deviation is {ratio:.2f}x the model's at tau = "
-                f"{location['tau_s']:.3g} s (departing over {where[0]:.3g}-{where[1]:.3g} s)"
+                f"{location['tau_s']:.3g} s{span}"
             )
         case "spectrum_bands":
             ratio = location["power_over_model"]

@@ -14,7 +14,9 @@
   reading that would exceed it materially was taken off the term's slope (the edge of a
   bump, a turning point). Otherwise — and where the
   curve has no stretch of the term's slope — the reading is replaced by the upper bound the
-  curve puts on the term, read from the upper confidence limits;
+  curve puts on the term: the tightest of the curve's upper confidence limits from ten sample
+  periods on (below them an output filter lowers the curve under every term's line), each
+  widened for the number of taus it was chosen from (Bonferroni);
 - the validity of the t-interval. It assumes independent samples. The Allan variance at tau
   is the variance of tau-averages, so the standard error of the mean over k = T / tau
   batches is ADEV(tau) / sqrt(k) (batch means, with the Allan variance as the batch variance
@@ -33,6 +35,7 @@ from scipy import special
 from ..recording._series import finite_moments, is_spooled, series_size
 from ..recording._units import BIAS_INSTABILITY_FACTOR
 from ._allan import DeviationResult, allan_deviation
+from ._edf import deviation_interval
 
 _MIN_BATCHES = 8
 # A local slope within this distance of a term's slope counts as that term's stretch.
@@ -183,8 +186,25 @@ def _local_slopes(allan: DeviationResult) -> np.ndarray:
 def _upper_bound(allan: DeviationResult, scale: np.ndarray, reason: str) -> SlopeReading:
     """The bound the whole curve puts on a term whose Allan deviation is ``parameter *
     scale``: each term's Allan variance is at most the total, so at every tau parameter <=
-    sigma(tau) / scale(tau); the upper confidence limit makes it a bound."""
-    bound = allan.ci_high / scale
+    sigma(tau) / scale(tau), and the tightest over the curve's k taus, each at its upper
+    limit of confidence 1 - (1 - c) / k (Bonferroni), is a bound at the curve's confidence c:
+    the tightest of k limits each at c would be picked where the curve happened to run low,
+    most often at a long tau of a few averages.
+
+    Not over the first ``_SAMPLING_PERIODS`` sample periods where longer taus exist: there a
+    sensor's output filter lowers the curve below every term's line, so it bounds nothing (a
+    4-sample decimation filter by 8.6x at one period on the PSAS pad gyro, whose N was
+    'bounded' at a tenth of its low-frequency level). Beyond them a filter's reach is a few
+    percent (a 4-sample moving average: 6 % at 16 periods), within the readings' 10 %
+    materiality."""
+    beyond = allan.m >= _SAMPLING_PERIODS
+    used = (beyond if beyond.any() else np.ones_like(beyond)) & np.isfinite(allan.edf)
+    if not used.any():  # no degrees of freedom to widen by: the curve's own limits
+        used, high = np.ones_like(beyond), allan.ci_high
+    else:
+        confidence = 1 - (1 - allan.confidence) / int(used.sum())
+        _, high = deviation_interval(allan.deviation, np.where(used, allan.edf, 1.0), confidence)
+    bound = np.where(used, high / scale, np.inf)
     tightest = int(np.argmin(bound))
     local = _local_slopes(allan)
     nearest = float(local[min(tightest, local.size - 1)]) if local.size else math.nan

@@ -48,7 +48,7 @@ def test_an_output_filter_does_not_lower_the_bound_below_the_truth():
     """A 4-sample moving average (unit gain at zero frequency) lowers the Allan curve at one
     sample period to a quarter of the white noise's line: a bound read there would sit at a
     quarter of the record's N. The bound is read from ten sample periods on, where the
-    filter's reach has shrunk to a few percent (6 % at 16 periods), within the 10 %
+    filter's reach has shrunk to a few percent (5-8 % at 16 periods), within the 10 %
     materiality the readings use."""
     from bayescal.classical._noise import _upper_bound
 

@@ -195,7 +195,7 @@ def _upper_bound(allan: DeviationResult, scale: np.ndarray, reason: str) -> Slop
     sensor's output filter lowers the curve below every term's line, so it bounds nothing (a
     4-sample decimation filter by 8.6x at one period on the PSAS pad gyro, whose N was
     'bounded' at a tenth of its low-frequency level). Beyond them a filter's reach is a few
-    percent (a 4-sample moving average: 6 % at 16 periods), within the readings' 10 %
+    percent (a 4-sample moving average: 5-8 % at 16 periods), within the readings' 10 %
     materiality."""
     beyond = allan.m >= _SAMPLING_PERIODS
     used = (beyond if beyond.any() else np.ones_like(beyond)) & np.isfinite(allan.edf)

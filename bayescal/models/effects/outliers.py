@@ -10,14 +10,14 @@ from ...recording._levels import discrete_step
 from ._base import Effect
 
 
-def _grid_quantile(x: np.ndarray, q: float, width: float) -> float:
-    """The ``q`` quantile of values on a grid of ``width``, each value taken as spread evenly
+def _grid_quantiles(x: np.ndarray, q, width: float) -> np.ndarray:
+    """The ``q`` quantiles of values on a grid of ``width``, each value taken as spread evenly
     over its cell (the grouped-data quantile): a plain quantile can only be a grid point."""
     levels, counts = np.unique(np.round(x / width), return_counts=True)
     below = np.concatenate([[0], np.cumsum(counts)])
-    target = q * x.size
-    cell = min(int(np.searchsorted(below[1:], target)), levels.size - 1)
-    return float((levels[cell] - 0.5 + (target - below[cell]) / counts[cell]) * width)
+    target = np.asarray(q) * x.size
+    cell = np.minimum(np.searchsorted(below[1:], target), levels.size - 1)
+    return (levels[cell] - 0.5 + (target - below[cell]) / counts[cell]) * width
 
 
 def robust_scores(values: np.ndarray) -> np.ndarray:
@@ -35,8 +35,8 @@ def robust_scores(values: np.ndarray) -> np.ndarray:
         # be one of them: 14 % under the spread at an LSB of half the noise sd, which made
         # 94 samples of a clean rounded record "glitches". The grouped interquartile range
         # interpolates within the cells instead (within 0.5 % there).
-        half = 0.5 * step
-        spread = (_grid_quantile(detail, 0.75, half) - _grid_quantile(detail, 0.25, half)) / 1.349
+        lower, upper = _grid_quantiles(detail, (0.25, 0.75), 0.5 * step)
+        spread = float(upper - lower) / 1.349
     else:
         spread = 1.4826 * np.median(np.abs(detail - np.median(detail)))
     # A detail of one LSB is never a glitch (on a coarse grid most details are 0 or one step).

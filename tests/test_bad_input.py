@@ -215,7 +215,9 @@ def test_time_in_milliseconds_needs_its_unit(run_cli, tmp_path, good_columns):
         "sample rate of 0.1 Hz",
         "--time-unit",
     )
-    code, stdout, _ = run_cli("noise", path, "--channel", "gyro_x", "--time-unit", "ms")
+    code, stdout, _ = run_cli(
+        "noise", path, "--channel", "gyro_x", "--time-unit", "ms", "--classical-only"
+    )
     assert code == 0 and "at 100 Hz" in stdout
 
 

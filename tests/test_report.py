@@ -118,12 +118,19 @@ def _assert_not_blank(image: np.ndarray) -> None:
 
 
 @pytest.fixture(scope="module")
-def report(tmp_path_factory):
+def bench_csv(tmp_path_factory):
+    """The two-channel recording alone, for the tests that run the command on it (the report
+    below is built once per worker process that asks for it)."""
+    return _recording(tmp_path_factory.mktemp("bench") / "bench.csv")
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory, bench_csv):
     """A report of the two channels, with a sensor card and a hand-made discovery."""
     from bayescal.report._report import report_recording
 
     folder = tmp_path_factory.mktemp("report")
-    csv = _recording(folder / "bench.csv")
+    csv = bench_csv
     outcome = report_recording(
         bc.load_recording(csv),
         ["gyro_x", "acc_z"],
@@ -225,8 +232,8 @@ def test_discovery_section_alone():
     assert "<img" not in partial
 
 
-def test_report_command_line(run_cli, report, tmp_path):
-    _, csv = report
+def test_report_command_line(run_cli, bench_csv, tmp_path):
+    csv = bench_csv
     out = tmp_path / "cli"
     code, stdout, stderr = run_cli(
         "report", csv, "--channels", "gyro_x", "--out", out, "--terms", "white,rrw",
@@ -239,8 +246,8 @@ def test_report_command_line(run_cli, report, tmp_path):
     assert "channel/s" not in stderr  # no progress bar when stderr is not a terminal
 
 
-def test_report_failed_health_check_is_loud(run_cli, report, tmp_path):
-    _, csv = report
+def test_report_failed_health_check_is_loud(run_cli, bench_csv, tmp_path):
+    csv = bench_csv
     out = tmp_path / "failed"
     code, _, stderr = run_cli(
         "report", csv, "--channels", "gyro_x", "--out", out, "--terms", "white,rrw",
@@ -252,8 +259,8 @@ def test_report_failed_health_check_is_loud(run_cli, report, tmp_path):
     assert "autocorrelation-time criterion not met" in page
 
 
-def test_report_bad_input_exit_2(run_cli, report, tmp_path):
-    _, csv = report
+def test_report_bad_input_exit_2(run_cli, bench_csv, tmp_path):
+    csv = bench_csv
     code, _, stderr = run_cli("report", csv, "--channels", "gyro_q", "--out", tmp_path / "x")
     assert code == 2 and "gyro_q" in stderr
     code, _, stderr = run_cli(

@@ -164,6 +164,25 @@ def test_cli_contract_and_outputs(run_cli, tmp_path):
     assert "unexplained" not in document
 
 
+def test_a_simulation_sets_the_baseline(run_cli, tmp_path):
+    """``--sim``: what discovery finds in the team's simulation (here white noise alone) is the
+    recording's baseline, and the document says where it came from."""
+    paths = []
+    for seed in (7, 8):
+        t, values, _, _ = _record(seed)
+        paths.append(write_csv(tmp_path / f"rec{seed}.csv", {"time": t, "gyro_x": values}))
+    output = tmp_path / "findings.json"
+    code, _, stderr = run_cli(
+        "discover", paths[0], "--channel", "gyro_x", "--unit", "deg/s", "--sim", paths[1],
+        "--json", output, "--quiet",
+    )  # fmt: skip
+    assert code == 0, stderr
+    document = json.loads(output.read_text())
+    assert document["simulation"]["file"] == str(paths[1])
+    assert document["simulation"]["terms_found"] == ["bias", "white"]
+    assert document["baseline"] == ["bias", "white"] and document["effects"] == []
+
+
 def test_bad_input_is_refused_with_exit_2(run_cli, tmp_path):
     t, values, _, _ = _record(5)
     path = write_csv(tmp_path / "rec.csv", {"time": t, "gyro_x": values}, fmt="%.8g")

@@ -52,7 +52,9 @@ def add_parser(commands) -> None:
     parser.set_defaults(run=run)
 
 
-def _discover(args, path, baseline, *, max_effects: int, progress=None, seed: int = 0):
+def _discover(
+    args, path, baseline, *, max_effects: int, progress=None, seed: int = 0, posterior=True
+):
     """Discovery on the channel of one recording, with its temperature and accelerometers."""
     from ..capabilities._discovery import discover
     from ..recording._recording import companions
@@ -71,6 +73,7 @@ def _discover(args, path, baseline, *, max_effects: int, progress=None, seed: in
         max_effects=max_effects,
         progress=progress,
         seed=seed,
+        posterior=posterior,
     )
 
 
@@ -78,7 +81,8 @@ def _simulation_baseline(args) -> tuple[tuple[str, ...], dict]:
     """Discover on the user's simulation from white noise: what it holds is the baseline."""
     from ..models._terms import BASELINE_TERMS
 
-    found = _discover(args, args.sim, ("white",), max_effects=args.max_effects)
+    # Only the names of what the simulation holds are used: no posterior of its parameters.
+    found = _discover(args, args.sim, ("white",), max_effects=args.max_effects, posterior=False)
     names = [effect.name for effect in found.effects]
     terms = ["white", *(name for name in names if name in BASELINE_TERMS)]
     others = [name for name in names if name not in BASELINE_TERMS]

@@ -98,9 +98,11 @@ def test_unknown_sensor_and_term_exit_2(run_cli, white_and_walk):
 
 def test_failed_health_check_exits_1_and_says_which(run_cli, tmp_path, white_and_walk):
     output = tmp_path / "out.json"
+    # The record's own terms: the term search is tested on it elsewhere.
     code, stdout, stderr = run_cli(
-        "noise", white_and_walk, "--channel", "gyro_z", "--json", output, "--max-steps", "250"
-    )
+        "noise", white_and_walk, "--channel", "gyro_z", "--terms", "white,rrw",
+        "--json", output, "--max-steps", "250",
+    )  # fmt: skip
     assert code == 1
     assert "HEALTH CHECK FAILED" in stderr and "autocorrelation-time criterion" in stderr
     assert "POSTERIOR CHECKS FAILED" in stdout

@@ -11,8 +11,8 @@ os.environ.setdefault("JAX_PLATFORMS", "cpu")
 # The caches the command line keeps (JAX's compilations and bayescal's traced optimisers), set
 # before JAX is imported: both test workers, the notebooks' kernels of the docs build and the
 # commands run in-process share what one of them compiled, as a user's runs do. Their keys are
-# the computations themselves, and a cached function gives the same numbers to the last digit
-# (tests/test_noise_cli.py), so sharing them changes no result, only the time.
+# the computations themselves, and a cached function gives the same numbers to the last bit
+# (tests/test_traced.py), so sharing them changes no result, only the time.
 _enable_compilation_cache()
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"

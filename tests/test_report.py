@@ -130,9 +130,8 @@ def report(tmp_path_factory, bench_csv):
     from bayescal.report._report import report_recording
 
     folder = tmp_path_factory.mktemp("report")
-    csv = bench_csv
     outcome = report_recording(
-        bc.load_recording(csv),
+        bc.load_recording(bench_csv),
         ["gyro_x", "acc_z"],
         folder / "out",
         stem="bench",
@@ -141,7 +140,7 @@ def report(tmp_path_factory, bench_csv):
         seed=1,
         discoveries={"gyro_x": _findings()},
     )
-    return outcome, csv
+    return outcome, bench_csv
 
 
 def test_report_files_and_json(report):
@@ -233,10 +232,9 @@ def test_discovery_section_alone():
 
 
 def test_report_command_line(run_cli, bench_csv, tmp_path):
-    csv = bench_csv
     out = tmp_path / "cli"
     code, stdout, stderr = run_cli(
-        "report", csv, "--channels", "gyro_x", "--out", out, "--terms", "white,rrw",
+        "report", bench_csv, "--channels", "gyro_x", "--out", out, "--terms", "white,rrw",
         "--sensor", "MPU-6050", "--quiet",
     )  # fmt: skip
     assert code == 0, stderr
@@ -247,10 +245,9 @@ def test_report_command_line(run_cli, bench_csv, tmp_path):
 
 
 def test_report_failed_health_check_is_loud(run_cli, bench_csv, tmp_path):
-    csv = bench_csv
     out = tmp_path / "failed"
     code, _, stderr = run_cli(
-        "report", csv, "--channels", "gyro_x", "--out", out, "--terms", "white,rrw",
+        "report", bench_csv, "--channels", "gyro_x", "--out", out, "--terms", "white,rrw",
         "--sensor", "MPU-6050", "--max-steps", "250",
     )  # fmt: skip
     assert code == 1 and "HEALTH CHECK FAILED" in stderr
@@ -260,11 +257,10 @@ def test_report_failed_health_check_is_loud(run_cli, bench_csv, tmp_path):
 
 
 def test_report_bad_input_exit_2(run_cli, bench_csv, tmp_path):
-    csv = bench_csv
-    code, _, stderr = run_cli("report", csv, "--channels", "gyro_q", "--out", tmp_path / "x")
+    code, _, stderr = run_cli("report", bench_csv, "--channels", "gyro_q", "--out", tmp_path / "x")
     assert code == 2 and "gyro_q" in stderr
     code, _, stderr = run_cli(
-        "report", csv, "--channels", "gyro_x", "--sensor", "nope", "--out", tmp_path / "y"
+        "report", bench_csv, "--channels", "gyro_x", "--sensor", "nope", "--out", tmp_path / "y"
     )
     assert code == 2 and "no such sensor card" in stderr
 

@@ -105,7 +105,7 @@ def _bayesian_block(fit: "NoisePosterior", unit: str) -> dict:
             }
         parameters[name] = entry
     diagnostics = fit.diagnostics.as_dict()
-    diagnostics["sampler"] = "emcee ensemble, differential-evolution and snooker moves"
+    diagnostics["sampler"] = "emcee ensemble, differential-evolution moves"
     diagnostics["criteria"] = {
         "max_rhat": MAX_RHAT,
         "min_ess_bulk": MIN_ESS,

@@ -9,11 +9,13 @@ folder with its manifest, then ``bc.fit_fleet`` (white noise + rate random walk 
 recording) on one local Dask cluster shared by all fleets. The population's parameters differ
 from fleet to fleet (drawn from the ranges below), so the coverage is not that of one point.
 
-Printed: for each population parameter (median and log-sd of N and K; the bias's mean,
-unit-to-unit and run-to-run sd), how often its 90 % interval holds the truth, with an exact
-95 % binomial interval, and all of them pooled (the target: 86-94 %); the root-mean-square
-error of each unit's estimate (ln N, ln K, mean turn-on bias) shrunk toward the population,
-over that of its own fit (its runs alone), pooled over units and fleets.
+Printed per fleet: each interval's hit or miss, with the side of a miss (``MISS below``: the
+truth below the interval). Printed at the end: for each population parameter (median and
+log-sd of N and K; the bias's mean, unit-to-unit and run-to-run sd), how often its 90 %
+interval holds the truth, with an exact 95 % binomial interval, and all of them pooled (the
+target: 86-94 %); the root-mean-square error of each unit's estimate (ln N, ln K, mean
+turn-on bias) shrunk toward the population, over that of its own fit (its runs alone),
+pooled over units and fleets.
 
     python benchmarks/fleet_coverage.py [--fleets 100] [--workers 2] [--seed 0] [--units 8,40]
 
@@ -159,7 +161,9 @@ def fleet_study(
                     continue
                 hit = low <= truth[name] <= high
                 hits.setdefault(name, []).append(hit)
-                line.append(f"{name} {'ok' if hit else 'MISS'}")
+                # A miss says on which side the truth lay: "below" (the interval too high).
+                side = "ok" if hit else ("MISS below" if truth[name] < low else "MISS above")
+                line.append(f"{name} {side}")
             squared = unit_errors(fleet, truth_units)
             for name, pairs in squared.items():
                 errors.setdefault(name, []).extend(pairs)

@@ -199,6 +199,28 @@ def test_runs_that_disagree_fail_the_check(monkeypatch):
     assert unit_points(runs, ("N", "K"), rng)["combined_ess"] < 20
 
 
+def test_a_unit_in_the_populations_tail_gets_every_stored_draw():
+    """Thirty units whose K the records pin to 0.3 in the log, all of one K, and one unit two
+    of its sds off: the population is narrow, and the outlying unit's 256 points leave it
+    11-15 effective points there (< 20; measured with this seed). Sampled again with all its
+    1,984 stored draws as points, every unit has at least 20 and the population passes."""
+    from bayescal.inference._population import MAX_POINTS, MIN_POINT_ESS, fit_population
+
+    rng = np.random.default_rng(0)
+    sd = np.array([0.02, 0.3])
+    recordings = []
+    for u in range(30):
+        truth = np.array([-5.5, -5.3]) + np.array([0.1, 0.0]) * rng.standard_normal(2)
+        centre = truth + sd * rng.standard_normal(2)
+        if u == 0:
+            centre[1] = -5.3 - 2 * sd[1]
+        recordings.append(gaussian_run(rng, centre, sd, np.array([-5.0, -5.0]), unit=f"U{u:02d}"))
+    posterior = fit_population(recordings, ("N", "K"), seed=0)
+    assert posterior.points_per_unit == 1984 > MAX_POINTS
+    assert np.min(posterior.point_ess) >= MIN_POINT_ESS
+    assert posterior.passed, posterior.importance_failures
+
+
 def test_the_bias_integral_is_the_multivariate_normal_of_a_units_runs():
     import jax.numpy as jnp
     from scipy import stats

@@ -46,12 +46,11 @@ from ..inference._population import (
     Limit,
     PopulationPosterior,
     RecordingDraws,
-    fleet_data,
+    fit_population,
     outlier_threshold,
     outliers,
     predictive,
     resolved_parameters,
-    sample_population,
     spec_probabilities,
 )
 from ..models._noise_model import parameter_unit
@@ -881,9 +880,13 @@ def fit_fleet(
         for limit in limits
         if limit not in assessed
     ]
-    data = fleet_data(fitted, parameters, seed=_seed(seed, 0))
-    posterior = sample_population(
-        data, seed=_seed(seed, 0), n_walkers=n_walkers, max_steps=max_steps, progress=progress
+    posterior = fit_population(
+        fitted,
+        parameters,
+        seed=_seed(seed, 0),
+        n_walkers=n_walkers,
+        max_steps=max_steps,
+        progress=progress,
     )
     seconds = [r.seconds for r in fitted]
     compute = {

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..capabilities._fleet import FleetFit
 from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN_ESS
-from ..inference._population import MAX_POINTS, MIN_POINT_ESS, RESOLVED_LOG_SD
+from ..inference._population import MIN_POINT_ESS, RESOLVED_LOG_SD
 from ..models._noise_model import parameter_unit
 from ..models._population import LOG_SD_PRIOR_SCALE
 from ._html import _STYLE, _esc, _image, _interval, _new_figure, _num, _png, pretty_unit
@@ -119,7 +119,7 @@ def fleet_result(fleet: FleetFit) -> dict:
             "turn-on biases)",
             "resolved": f"a noise scale enters when its posterior sd of ln is <= "
             f"{RESOLVED_LOG_SD:g} in at least half of the recordings",
-            "points_per_unit": MAX_POINTS,
+            "points_per_unit": fleet.population.points_per_unit,
             "median_definition": "exp(mu_p): the population median",
             "log_sd_definition": "sigma_p: sd of the natural log across units",
             "bias_definition": "turn-on bias: the expected reading at the start of a run",

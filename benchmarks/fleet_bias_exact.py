@@ -12,6 +12,13 @@ half-Cauchy priors. Printed, over the fleets: how often bayescal's intervals (em
 (1 when the sampler draws the posterior it is given).
 
     python benchmarks/fleet_bias_exact.py [--fleets 200] [--seed 2] [--sd 0.001,0.006]
+    python benchmarks/fleet_bias_exact.py --grid-only --factors 1,10 [--units 8,40]
+                                          [--fleets 1000] [--seed 7]
+
+``--grid-only`` leaves emcee out and sets the grid's coverage of the two sds side by side for
+half-Cauchy priors of several scales (``--factors``: times the fleet's own spread of turn-on
+biases; the library's is ``BIAS_SD_PRIOR_FACTOR``), with the side of each miss: the study that
+chose ten.
 
 This study found emcee's snooker move narrowing every posterior (docs/methods/noise-model.md,
 "Fit"): with it, bayescal's interval of the mean bias was 7 % narrower than the grid's.
@@ -31,16 +38,17 @@ from bayescal.inference._population import (
     fleet_data,
     sample_population,
 )
+from bayescal.models._population import BIAS_SD_PRIOR_FACTOR
 
 DRAWS = 500
 GRID = 150
 
 
-def simulate_fleet(rng, sd_range, seed):
+def simulate_fleet(rng, sd_range, seed, units=UNITS):
     """A population, and one RecordingDraws per run: its bias measured with a known sd."""
     population = draw_population(rng)
-    count = round(math.exp(rng.uniform(math.log(UNITS[0]), math.log(UNITS[1] + 0.5))))
-    count = min(max(count, UNITS[0]), UNITS[1])
+    count = round(math.exp(rng.uniform(math.log(units[0]), math.log(units[1] + 0.5))))
+    count = min(max(count, units[0]), units[1])
     per_unit = rng.integers(RUNS[0], RUNS[1] + 1, count)
     recordings = []
     for u, unit in enumerate(population.simulate(per_unit, seed=seed)):
@@ -67,7 +75,7 @@ def simulate_fleet(rng, sd_range, seed):
     return population, recordings
 
 
-def grid_intervals(recordings, prior_scale) -> dict:
+def grid_intervals(recordings, prior_scale, mean: bool = True) -> dict:
     """The exact posterior's 90 % intervals: the unit and run levels integrated in closed form
     (as ``models/_population.py`` writes them), the mean bias analytically, the sds on a grid."""
     units: dict[str, list] = {}
@@ -97,15 +105,42 @@ def grid_intervals(recordings, prior_scale) -> dict:
         log_post += half_cauchy_of_log(tau_run)
     weight = np.exp(log_post - log_post.max())
     weight /= weight.sum()
-    mean, sd = weighted / precision, np.sqrt(1 / precision)
-    centre = float(np.sum(weight * mean))
-    axis = np.linspace(centre - 0.3, centre + 0.3, 1201)
-    cdf = np.array([np.sum(weight * stats.norm.cdf((x - mean) / sd)) for x in axis])
-    found = {"bias_mean": tuple(np.interp([0.05, 0.95], cdf, axis))}
+    found = {}
+    if mean:
+        centres, sd = weighted / precision, np.sqrt(1 / precision)
+        middle = float(np.sum(weight * centres))
+        axis = np.linspace(middle - 0.3, middle + 0.3, 1201)
+        cdf = np.array([np.sum(weight * stats.norm.cdf((x - centres) / sd)) for x in axis])
+        found["bias_mean"] = tuple(np.interp([0.05, 0.95], cdf, axis))
     for name, summed in (("bias_unit_sd", 1), ("bias_run_sd", 0)):
-        cumulative = np.cumsum(weight.sum(axis=summed))
+        marginal = weight.sum(axis=summed)
+        cumulative = np.cumsum(marginal) - 0.5 * marginal  # each point is its cell's middle
         found[name] = tuple(np.exp(np.interp([0.05, 0.95], cumulative, log_sd)))
     return found
+
+
+def prior_study(rng, fleets, sd_range, units, factors, seed) -> None:
+    """The grid's coverage of the two sds under half-Cauchy priors of several scales."""
+    sides = {(f, name): [] for f in factors for name in ("bias_unit_sd", "bias_run_sd")}
+    for index in range(fleets):
+        population, recordings = simulate_fleet(rng, sd_range, seed * 1000 + index, units)
+        spread = bias_prior_scale(recordings) / BIAS_SD_PRIOR_FACTOR
+        truth = {"bias_unit_sd": population.bias_unit_sd, "bias_run_sd": population.bias_run_sd}
+        for factor in factors:
+            exact = grid_intervals(recordings, factor * spread, mean=False)
+            for name, value in truth.items():
+                low, high = exact[name]
+                side = "ok" if low <= value <= high else ("below" if value < low else "above")
+                sides[factor, name].append(side)
+    print(f"{fleets} fleets of {units[0]}-{units[1]} units; 90 % intervals of the exact posterior")
+    for (factor, name), found in sides.items():
+        held = found.count("ok")
+        low, high = clopper_pearson(held, len(found))
+        print(
+            f"  half-Cauchy scale {factor:g} x spread  {name:<13} {held / len(found):6.1%} "
+            f"[{low:.1%}, {high:.1%}]  truth below {found.count('below')}, "
+            f"above {found.count('above')}"
+        )
 
 
 def main() -> None:
@@ -113,15 +148,23 @@ def main() -> None:
     parser.add_argument("--fleets", type=int, default=200)
     parser.add_argument("--seed", type=int, default=2)
     parser.add_argument("--sd", default="0.001,0.006", help="range of each run's bias sd, deg/s")
+    parser.add_argument("--units", default=f"{UNITS[0]},{UNITS[1]}", help="fewest,most units")
+    parser.add_argument("--grid-only", action="store_true", help="the prior study, no emcee")
+    parser.add_argument("--factors", default=f"1,{BIAS_SD_PRIOR_FACTOR:g}")
     args = parser.parse_args()
     sd_range = tuple(float(x) for x in args.sd.split(","))
+    units = tuple(int(n) for n in args.units.split(","))
     rng = np.random.default_rng(args.seed)
+    if args.grid_only:
+        factors = [float(f) for f in args.factors.split(",")]
+        prior_study(rng, args.fleets, sd_range, units, factors, args.seed)
+        return
     keys = {"bias_mean": "mu_bias", "bias_unit_sd": "tau_unit", "bias_run_sd": "tau_run"}
     hits = {name: {"bayescal": [], "grid": []} for name in keys}
     widths = {name: [] for name in keys}
     started = time.perf_counter()
     for index in range(args.fleets):
-        population, recordings = simulate_fleet(rng, sd_range, args.seed * 1000 + index)
+        population, recordings = simulate_fleet(rng, sd_range, args.seed * 1000 + index, units)
         exact = grid_intervals(recordings, bias_prior_scale(recordings))
         posterior = sample_population(fleet_data(recordings, (), seed=index), seed=index)
         truth = {

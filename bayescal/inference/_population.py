@@ -53,7 +53,7 @@ from scipy.special import ndtr
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
-from ..models._population import PopulationModel
+from ..models._population import BIAS_SD_PRIOR_FACTOR, PopulationModel
 from ..recording._units import parse_unit
 from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
 from ._optimize import maximum_a_posteriori
@@ -311,12 +311,12 @@ def fleet_data(recordings, parameters, *, seed: int = 0, max_points: int = MAX_P
 
 
 def bias_prior_scale(recordings) -> float:
-    """The half-Cauchy scale of the bias's spreads: the fleet's own spread of turn-on biases,
-    or the typical uncertainty of one where they agree."""
+    """The half-Cauchy scale of the bias's spreads: BIAS_SD_PRIOR_FACTOR times the fleet's own
+    spread of turn-on biases, or of the typical uncertainty of one where they agree."""
     means = np.array([np.mean(r.bias_mean) for r in recordings])
     sds = np.array([math.sqrt(np.mean(r.bias_sd**2) + np.var(r.bias_mean)) for r in recordings])
     spread = float(np.std(means, ddof=1)) if means.size > 1 else 0.0
-    return max(spread, float(np.median(sds)))
+    return BIAS_SD_PRIOR_FACTOR * max(spread, float(np.median(sds)))
 
 
 def population_model(data: FleetData, bias_scale: float) -> PopulationModel:
@@ -405,7 +405,7 @@ def own_estimates(data: FleetData) -> list[dict]:
 
 def _start(model: PopulationModel, own: list[dict], data: FleetData) -> np.ndarray:
     """A start for the MAP from the units' own estimates."""
-    floor = 0.1 * float(model.bias_scale)
+    floor = 0.1 * float(model.bias_scale) / BIAS_SD_PRIOR_FACTOR
     biases = np.array([estimate["bias"]["mean"] for estimate in own])
     theta = []
     if model.unit_spread:

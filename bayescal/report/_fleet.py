@@ -18,7 +18,7 @@ from ..capabilities._fleet import FleetFit
 from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN_ESS
 from ..inference._population import MIN_POINT_ESS, RESOLVED_LOG_SD
 from ..models._noise_model import parameter_unit
-from ..models._population import LOG_SD_PRIOR_SCALE
+from ..models._population import BIAS_SD_PRIOR_FACTOR, LOG_SD_PRIOR_SCALE
 from ._html import _STYLE, _esc, _image, _interval, _new_figure, _num, _png, pretty_unit
 
 _NAMES = {"N": "N white noise", "B": "B bias instability", "K": "K rate random walk"}
@@ -115,8 +115,8 @@ def fleet_result(fleet: FleetFit) -> dict:
             "Normal(unit mean bias, tau_run); fitted from each recording's posterior draws "
             "reweighted by population prior over fitting prior (Hogg, Myers & Bovy 2010)",
             "prior": "mu flat; sigma_p half-Cauchy(0, "
-            f"{LOG_SD_PRIOR_SCALE:g}); tau_unit, tau_run half-Cauchy(0, the fleet's spread of "
-            "turn-on biases)",
+            f"{LOG_SD_PRIOR_SCALE:g}); tau_unit, tau_run half-Cauchy(0, "
+            f"{BIAS_SD_PRIOR_FACTOR:g} x the fleet's spread of turn-on biases)",
             "resolved": f"a noise scale enters when its posterior sd of ln is <= "
             f"{RESOLVED_LOG_SD:g} in at least half of the recordings",
             "points_per_unit": fleet.population.points_per_unit,

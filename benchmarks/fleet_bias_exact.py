@@ -34,7 +34,7 @@ from scipy import stats
 
 from bayescal.inference._population import (
     RecordingDraws,
-    bias_prior_scale,
+    bias_spread,
     fleet_data,
     sample_population,
 )
@@ -124,7 +124,7 @@ def prior_study(rng, fleets, sd_range, units, factors, seed) -> None:
     sides = {(f, name): [] for f in factors for name in ("bias_unit_sd", "bias_run_sd")}
     for index in range(fleets):
         population, recordings = simulate_fleet(rng, sd_range, seed * 1000 + index, units)
-        spread = bias_prior_scale(recordings) / BIAS_SD_PRIOR_FACTOR
+        spread = bias_spread(recordings)
         truth = {"bias_unit_sd": population.bias_unit_sd, "bias_run_sd": population.bias_run_sd}
         for factor in factors:
             exact = grid_intervals(recordings, factor * spread, mean=False)
@@ -165,7 +165,7 @@ def main() -> None:
     started = time.perf_counter()
     for index in range(args.fleets):
         population, recordings = simulate_fleet(rng, sd_range, args.seed * 1000 + index, units)
-        exact = grid_intervals(recordings, bias_prior_scale(recordings))
+        exact = grid_intervals(recordings, BIAS_SD_PRIOR_FACTOR * bias_spread(recordings))
         posterior = sample_population(fleet_data(recordings, (), seed=index), seed=index)
         truth = {
             "bias_mean": population.bias_mean,

@@ -53,7 +53,7 @@ from scipy.special import ndtr
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
-from ..models._population import BIAS_SD_PRIOR_FACTOR, PopulationModel
+from ..models._population import PopulationModel
 from ..recording._units import parse_unit
 from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
 from ._optimize import maximum_a_posteriori
@@ -310,16 +310,16 @@ def fleet_data(recordings, parameters, *, seed: int = 0, max_points: int = MAX_P
     )
 
 
-def bias_prior_scale(recordings) -> float:
-    """The half-Cauchy scale of the bias's spreads: BIAS_SD_PRIOR_FACTOR times the fleet's own
-    spread of turn-on biases, or of the typical uncertainty of one where they agree."""
+def bias_spread(recordings) -> float:
+    """The fleet's own spread of turn-on biases, or the typical uncertainty of one where they
+    agree: the unit of the priors of the bias's sds (models/_population.py)."""
     means = np.array([np.mean(r.bias_mean) for r in recordings])
     sds = np.array([math.sqrt(np.mean(r.bias_sd**2) + np.var(r.bias_mean)) for r in recordings])
     spread = float(np.std(means, ddof=1)) if means.size > 1 else 0.0
-    return BIAS_SD_PRIOR_FACTOR * max(spread, float(np.median(sds)))
+    return max(spread, float(np.median(sds)))
 
 
-def population_model(data: FleetData, bias_scale: float) -> PopulationModel:
+def population_model(data: FleetData, spread: float) -> PopulationModel:
     """The population model of a fleet's weighted points, padded to common sizes: the data's
     most points, the most runs of a unit, and a multiple of UNIT_BLOCK units (a padded unit is one
     run at one point, with weight 1, masked out of the likelihood)."""
@@ -350,7 +350,7 @@ def population_model(data: FleetData, bias_scale: float) -> PopulationModel:
         bias_variance=leading("bias_variance", 1.0, runs),
         unit_mask=jnp.asarray(np.arange(units) < count, dtype=float),
         run_mask=jnp.asarray(_pad([np.ones(n) for n in run_counts], 0.0, (units, runs)).T),
-        bias_scale=jnp.asarray(bias_scale),
+        bias_spread=jnp.asarray(spread),
         parameters=data.parameters,
         unit_spread=count > 1,
         run_spread=runs > 1,
@@ -405,7 +405,7 @@ def own_estimates(data: FleetData) -> list[dict]:
 
 def _start(model: PopulationModel, own: list[dict], data: FleetData) -> np.ndarray:
     """A start for the MAP from the units' own estimates."""
-    floor = 0.1 * float(model.bias_scale) / BIAS_SD_PRIOR_FACTOR
+    floor = 0.1 * float(model.bias_spread)
     biases = np.array([estimate["bias"]["mean"] for estimate in own])
     theta = []
     if model.unit_spread:
@@ -536,7 +536,7 @@ def sample_population(
     """MAP, then emcee over the population's parameters, checked; then each unit's shrunk
     draws, its log-likelihood at every draw and its points' effective number."""
     recordings = [run for runs in data.runs for run in runs]
-    model = population_model(data, bias_prior_scale(recordings))
+    model = population_model(data, bias_spread(recordings))
     own = own_estimates(data)
     rng = np.random.default_rng(seed)
     start = jnp.asarray(_start(model, own, data))

@@ -163,8 +163,9 @@ class PopulationModel(eqx.Module):
     """(R, U) 1.0 for a run, 0.0 for padding. (Parameters and runs lead the arrays: the
     sums over them are then whole-array operations, ten times faster than over a last axis
     of two or three.)"""
-    bias_scale: jax.Array
-    """Scale of the half-Cauchy priors of tau_unit and tau_run, the channel's unit."""
+    bias_spread: jax.Array
+    """The fleet's own spread of turn-on biases, the channel's unit: the half-Cauchy priors of
+    tau_unit and tau_run have BIAS_SD_PRIOR_FACTOR times it as their scale."""
     parameters: tuple[str, ...] = eqx.field(static=True)
     unit_spread: bool = eqx.field(static=True)
     """More than one unit: the spreads across units are in the model."""
@@ -206,12 +207,13 @@ class PopulationModel(eqx.Module):
         def half_cauchy_of_log(sd, scale):
             return jnp.log(2 / jnp.pi) + jnp.log(scale) - jnp.log(scale**2 + sd**2) + jnp.log(sd)
 
+        bias_scale = BIAS_SD_PRIOR_FACTOR * self.bias_spread
         total = 0.0
         if self.unit_spread:
             total = total + jnp.sum(half_cauchy_of_log(values["sigma"], LOG_SD_PRIOR_SCALE))
-            total = total + half_cauchy_of_log(values["tau_unit"], self.bias_scale)
+            total = total + half_cauchy_of_log(values["tau_unit"], bias_scale)
         if self.run_spread:
-            total = total + half_cauchy_of_log(values["tau_run"], self.bias_scale)
+            total = total + half_cauchy_of_log(values["tau_run"], bias_scale)
         return total
 
     def point_log_weights(self, theta):

@@ -176,6 +176,30 @@ def test_a_streamed_channel_is_the_in_memory_channel(small_blocks, tmp_path, suf
         assert np.array_equal(disk.values.read(0, disk.values.size), memory.values, equal_nan=True)
 
 
+def test_each_sample_takes_its_place_on_the_grid_whatever_the_stamps(tmp_path):
+    """Evenly spaced stamps (the loader's shortcut: no grid search, the mean step as the
+    period), stamps with 0.1 % jitter and stamps with a dropped sample give the same grid and
+    rate as the rate given outright."""
+    values = gyro(20_000, seed=6)
+    even = np.arange(values.size) / RATE
+    jitter = even + 1e-5 * np.random.default_rng(1).standard_normal(values.size)
+    given = bc.Recording("given", {"gyro_x": values}, {"gyro_x": "deg/s"}).channel(
+        "gyro_x", rate=RATE
+    )
+    for stamps in (even, jitter, 1e6 + even):
+        path = tmp_path / "gyro.parquet"
+        write_table(path, values, stamps)
+        channel = bc.load_recording(path).channel("gyro_x")
+        assert channel.rate_hz == pytest.approx(RATE, rel=1e-6)
+        assert np.array_equal(channel.values, given.values)
+    keep = np.ones(values.size, bool)
+    keep[7_000] = False
+    write_table(path, values[keep], even[keep])
+    gapped = bc.load_recording(path).channel("gyro_x", gaps="split")
+    assert gapped.rate_hz == RATE and np.isnan(gapped.values[7_000])
+    assert np.array_equal(np.delete(gapped.values, 7_000), values[keep])
+
+
 def test_a_gap_between_blocks_is_refused_by_row_as_in_memory(small_blocks, tmp_path):
     path = tmp_path / "gyro.parquet"
     values = gyro(30_000, seed=2)

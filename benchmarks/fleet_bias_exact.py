@@ -12,13 +12,15 @@ half-Cauchy priors. Printed, over the fleets: how often bayescal's intervals (em
 (1 when the sampler draws the posterior it is given).
 
     python benchmarks/fleet_bias_exact.py [--fleets 200] [--seed 2] [--sd 0.001,0.006]
-    python benchmarks/fleet_bias_exact.py --grid-only --factors 1,10 [--units 8,40]
+    python benchmarks/fleet_bias_exact.py --grid-only --factors 1,10,log [--units 8,40]
                                           [--fleets 1000] [--seed 7]
 
 ``--grid-only`` leaves emcee out and sets the grid's coverage of the two sds side by side for
 half-Cauchy priors of several scales (``--factors``: times the fleet's own spread of turn-on
-biases; the library's is ``BIAS_SD_PRIOR_FACTOR``), with the side of each miss: the study that
-chose ten.
+biases; the library's is ``BIAS_SD_PRIOR_FACTOR``; ``log``: a prior flat in log sd), with the
+side of each miss, overall and by thirds of the truth's range: the study that chose ten, and
+the one that found the run-to-run sd's misses (the truth below the interval) the exact
+posterior's own.
 
 This study found emcee's snooker move narrowing every posterior (docs/methods/noise-model.md,
 "Fit"): with it, bayescal's interval of the mean bias was 7 % narrower than the grid's.
@@ -29,7 +31,7 @@ import math
 import time
 
 import numpy as np
-from fleet_coverage import RUNS, UNITS, clopper_pearson, draw_population
+from fleet_coverage import RANGES, RUNS, UNITS, clopper_pearson, draw_population
 from scipy import stats
 
 from bayescal.inference._population import (
@@ -77,7 +79,9 @@ def simulate_fleet(rng, sd_range, seed, units=UNITS):
 
 def grid_intervals(recordings, prior_scale, mean: bool = True) -> dict:
     """The exact posterior's 90 % intervals: the unit and run levels integrated in closed form
-    (as ``models/_population.py`` writes them), the mean bias analytically, the sds on a grid."""
+    (as ``models/_population.py`` writes them), the mean bias analytically, the sds on a grid.
+    ``prior_scale`` is the sds' half-Cauchy scale; None: a prior flat in their logs (Jeffreys'
+    1 / sd, proper on the grid's range)."""
     units: dict[str, list] = {}
     for r in recordings:
         units.setdefault(r.unit, []).append((r.bias_mean[0], r.bias_sd[0] ** 2))
@@ -98,6 +102,8 @@ def grid_intervals(recordings, prior_scale, mean: bool = True) -> dict:
     log_post += 0.5 * weighted**2 / precision + 0.5 * np.log(2 * np.pi / precision)
 
     def half_cauchy_of_log(tau):
+        if prior_scale is None:
+            return np.zeros_like(tau)
         return np.log(2 / np.pi * prior_scale / (prior_scale**2 + tau**2)) + np.log(tau)
 
     log_post += half_cauchy_of_log(tau_unit)
@@ -120,27 +126,45 @@ def grid_intervals(recordings, prior_scale, mean: bool = True) -> dict:
 
 
 def prior_study(rng, fleets, sd_range, units, factors, seed) -> None:
-    """The grid's coverage of the two sds under half-Cauchy priors of several scales."""
-    sides = {(f, name): [] for f in factors for name in ("bias_unit_sd", "bias_run_sd")}
+    """The grid's coverage of the two sds under half-Cauchy priors of several scales (a
+    factor None: the prior flat in log sd), with the side of each miss, overall and by thirds
+    of the range the simulation draws the truth from."""
+    names = {"bias_unit_sd": "unit_sd", "bias_run_sd": "run_sd"}
+    sides = {(f, name): [] for f in factors for name in names}
+    truths = {name: [] for name in names}
     for index in range(fleets):
         population, recordings = simulate_fleet(rng, sd_range, seed * 1000 + index, units)
         spread = bias_spread(recordings)
         truth = {"bias_unit_sd": population.bias_unit_sd, "bias_run_sd": population.bias_run_sd}
+        for name, value in truth.items():
+            truths[name].append(value)
         for factor in factors:
-            exact = grid_intervals(recordings, factor * spread, mean=False)
+            exact = grid_intervals(
+                recordings, None if factor is None else factor * spread, mean=False
+            )
             for name, value in truth.items():
                 low, high = exact[name]
                 side = "ok" if low <= value <= high else ("below" if value < low else "above")
                 sides[factor, name].append(side)
     print(f"{fleets} fleets of {units[0]}-{units[1]} units; 90 % intervals of the exact posterior")
-    for (factor, name), found in sides.items():
-        held = found.count("ok")
-        low, high = clopper_pearson(held, len(found))
+    for (factor, name), listed in sides.items():
+        found = np.array(listed)
+        held = int(np.sum(found == "ok"))
+        low, high = clopper_pearson(held, found.size)
+        prior = "flat in log sd      " if factor is None else f"half-Cauchy {factor:g} x spread"
         print(
-            f"  half-Cauchy scale {factor:g} x spread  {name:<13} {held / len(found):6.1%} "
-            f"[{low:.1%}, {high:.1%}]  truth below {found.count('below')}, "
-            f"above {found.count('above')}"
+            f"  {prior}  {name:<13} {held / found.size:6.1%} [{low:.1%}, {high:.1%}]  "
+            f"truth below {np.sum(found == 'below')}, above {np.sum(found == 'above')}"
         )
+        edges = np.linspace(*RANGES[names[name]], 4)
+        third = np.clip(np.searchsorted(edges, truths[name]) - 1, 0, 2)
+        for k in range(3):
+            part = found[third == k]
+            print(
+                f"      truth {edges[k]:.3f}-{edges[k + 1]:.3f} deg/s: {np.mean(part == 'ok'):6.1%}"
+                f" of {part.size}, below {np.sum(part == 'below')}, "
+                f"above {np.sum(part == 'above')}"
+            )
 
 
 def main() -> None:
@@ -156,7 +180,7 @@ def main() -> None:
     units = tuple(int(n) for n in args.units.split(","))
     rng = np.random.default_rng(args.seed)
     if args.grid_only:
-        factors = [float(f) for f in args.factors.split(",")]
+        factors = [None if f == "log" else float(f) for f in args.factors.split(",")]
         prior_study(rng, args.fleets, sd_range, units, factors, args.seed)
         return
     keys = {"bias_mean": "mu_bias", "bias_unit_sd": "tau_unit", "bias_run_sd": "tau_run"}

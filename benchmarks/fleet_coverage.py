@@ -15,7 +15,9 @@ log-sd of N and K; the bias's mean, unit-to-unit and run-to-run sd), how often i
 interval holds the truth, with an exact 95 % binomial interval, and all of them pooled (the
 target: 86-94 %); the root-mean-square error of each unit's estimate (ln N, ln K, mean
 turn-on bias) shrunk toward the population, over that of its own fit (its runs alone),
-pooled over units and fleets.
+pooled over units and fleets; for ln N and ln K beside it the same ratio for the plain mean of
+the unit's shrunk draws, which picks one of its points per population draw and so carries
+that picking's Monte Carlo noise (``PopulationPosterior.unit_log_means`` averages it out).
 
     python benchmarks/fleet_coverage.py [--fleets 100] [--workers 2] [--seed 0] [--units 8,40]
 
@@ -108,21 +110,27 @@ def intervals(fleet) -> dict:
 
 
 def unit_errors(fleet, units) -> dict:
-    """Squared errors of each unit's shrunk and own estimates: ln N, ln K (posterior means of
-    the log) and the mean turn-on bias."""
+    """Squared errors of each unit's estimates: shrunk (for ln N and ln K the posterior mean of
+    the log, Rao-Blackwellised: ``unit_log_means``), shrunk as the mean of the unit's shrunk
+    draws (one point picked per population draw), and its own fit's; for the mean turn-on
+    bias the first two are both the mean of its shrunk draws."""
     posterior = fleet.population
     errors = {}
     for u, name in enumerate(posterior.units):
         truth = units[int(name.removeprefix("SN"))]
         own = posterior.own[u]
         for p in fleet.parameters:
-            shrunk = float(np.mean(posterior.unit_draws[name][p]))
+            log_truth = math.log(truth[p])
             errors.setdefault(p, []).append(
-                ((shrunk - math.log(truth[p])) ** 2, (own[p]["log_mean"] - math.log(truth[p])) ** 2)
+                (
+                    (posterior.unit_log_means[name][p] - log_truth) ** 2,
+                    (float(np.mean(posterior.unit_draws[name][p])) - log_truth) ** 2,
+                    (own[p]["log_mean"] - log_truth) ** 2,
+                )
             )
-        shrunk = float(np.mean(posterior.unit_draws[name]["bias"]))
+        shrunk = (float(np.mean(posterior.unit_draws[name]["bias"])) - truth["unit_bias"]) ** 2
         errors.setdefault("bias", []).append(
-            ((shrunk - truth["unit_bias"]) ** 2, (own["bias"]["mean"] - truth["unit_bias"]) ** 2)
+            (shrunk, shrunk, (own["bias"]["mean"] - truth["unit_bias"]) ** 2)
         )
     return errors
 
@@ -165,13 +173,13 @@ def fleet_study(
                 side = "ok" if hit else ("MISS below" if truth[name] < low else "MISS above")
                 line.append(f"{name} {side}")
             squared = unit_errors(fleet, truth_units)
-            for name, pairs in squared.items():
-                errors.setdefault(name, []).extend(pairs)
-            # Sums of squared errors (shrunk / own), so that a study cut short can be pooled.
-            line += [
-                f"SSE {name} {np.sum(pairs, axis=0)[0]:.4g}/{np.sum(pairs, axis=0)[1]:.4g}"
-                for name, pairs in squared.items()
-            ]
+            for name, triples in squared.items():
+                errors.setdefault(name, []).extend(triples)
+            # Sums of squared errors (shrunk / own / shrunk draws' mean), so that a study cut
+            # short can be pooled.
+            for name, triples in squared.items():
+                shrunk, drawn, own = np.sum(triples, axis=0)
+                line.append(f"SSE {name} {shrunk:.4g}/{own:.4g}/{drawn:.4g}")
             log(
                 f"fleet {index:3d}: {count:2d} units, {per_unit.sum():3d} recordings, "
                 f"{time.perf_counter() - started:5.0f} s, passed {fleet.passed}, "
@@ -206,11 +214,11 @@ def report(hits, errors, failures, log=print) -> None:
     )
     log("\nper-unit error, shrunk toward the population / the unit's own fit (RMS ratio):")
     for name, squared in errors.items():
-        shrunk, own = np.sqrt(np.mean(squared, axis=0))
+        shrunk, drawn, own = np.sqrt(np.mean(squared, axis=0))
         what = "mean turn-on bias, deg/s" if name == "bias" else f"ln {name}"
         log(
             f"  {name:<5} {shrunk / own:.3f}  (RMS {shrunk:.4g} vs {own:.4g}, {what}, "
-            f"{len(squared)} units)"
+            f"{len(squared)} units; the shrunk draws' mean {drawn / own:.3f})"
         )
     log(f"\nfleets whose population failed its checks or left recordings out: {len(failures)}")
     for index, population_failures, left_out in failures:

@@ -353,6 +353,18 @@ def test_the_population_holds_the_truth(local_fleet, fleet_files):
         assert entry["unit"] in ("deg/s/sqrt(Hz)", "1", "deg/s")
 
 
+def test_a_units_expected_log_is_the_mean_of_its_shrunk_draws(local_fleet):
+    """The Rao-Blackwellised shrunk mean of a unit's ln N (its expected value given each
+    population draw, averaged) and the plain mean of its shrunk draws estimate one number:
+    they agree within four Monte Carlo sds of the plain mean (the draws' sd over the square
+    root of a tenth of their count: an autocorrelation time of up to ten draws)."""
+    posterior = local_fleet.population
+    for unit in posterior.units:
+        draws = posterior.unit_draws[unit]["N"]
+        tolerance = 4 * np.std(draws) / np.sqrt(draws.size / 10)
+        assert abs(posterior.unit_log_means[unit]["N"] - np.mean(draws)) < tolerance, unit
+
+
 def test_the_json_contract(local_fleet):
     from bayescal.report._fleet import fleet_page, fleet_result
 

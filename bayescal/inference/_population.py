@@ -428,10 +428,13 @@ def _start(model: PopulationModel, own: list[dict], data: FleetData) -> np.ndarr
 @eqx.filter_jit
 def _at_draws(model: PopulationModel, theta, key):
     """For a chunk of posterior draws: each unit's log-likelihood, its points' effective
-    number, and one shrunk draw of its noise scales' logs and of its mean bias."""
+    number, one shrunk draw of its noise scales' logs and of its mean bias, and the expected
+    value of those logs given the draw (the weighted mean over all of the unit's points, where
+    the draw above picks one: the same expectation without the picking's Monte Carlo noise)."""
     weights = jax.vmap(model.point_log_weights)(theta)  # (S, U, J)
     log_likelihood = logsumexp(weights, axis=-1)
     ess = jnp.exp(2 * log_likelihood - logsumexp(2 * weights, axis=-1))
+    expected = jnp.einsum("suj,duj->sud", jax.nn.softmax(weights, axis=-1), model.points)
     pick_key, bias_key = jax.random.split(key)
     pick = jax.random.categorical(pick_key, weights, axis=-1)  # (S, U)
 
@@ -456,7 +459,7 @@ def _at_draws(model: PopulationModel, theta, key):
         )
     else:
         level = jnp.broadcast_to(values["mu_bias"][:, None], total.shape)
-    return log_likelihood, ess, points, level
+    return log_likelihood, ess, points, level, expected
 
 
 class PopulationPosterior(eqx.Module):
@@ -472,6 +475,10 @@ class PopulationPosterior(eqx.Module):
     at each draw (S = walkers x draws, flattened)."""
     unit_draws: dict
     """unit -> {parameter: (S,) natural logs, "bias": (S,) mean turn-on bias}, shrunk."""
+    unit_log_means: dict
+    """unit -> {parameter: posterior mean of its natural log}, shrunk: the mean over the
+    population's draws of the unit's expected log given each (Rao-Blackwellised), which
+    ``unit_draws`` estimates with the added noise of picking one point per draw."""
     unit_log_likelihood: np.ndarray
     """(S, U) log p(d_u | population) at each draw."""
     point_ess: np.ndarray
@@ -558,8 +565,8 @@ def sample_population(
         key, chunk_key = jax.random.split(key)
         pieces.append(_at_draws(model, jnp.asarray(flat[start_at : start_at + _CHUNK]), chunk_key))
     count = len(data.units)
-    log_likelihood, _, points, level = (
-        np.concatenate([np.asarray(piece[i]) for piece in pieces])[:, :count] for i in range(4)
+    log_likelihood, _, points, level, expected = (
+        np.concatenate([np.asarray(piece[i]) for piece in pieces])[:, :count] for i in range(5)
     )
     median = jnp.asarray(np.median(flat, axis=0))[None]
     point_ess = np.asarray(_at_draws(model, median, key)[1])[0, :count]
@@ -571,6 +578,10 @@ def sample_population(
         }
         for u, unit in enumerate(data.units)
     }
+    unit_log_means = {
+        unit: {p: float(np.mean(expected[:, u, i])) for i, p in enumerate(data.parameters)}
+        for u, unit in enumerate(data.units)
+    }
     return PopulationPosterior(
         names=model.names,
         parameters=data.parameters,
@@ -578,6 +589,7 @@ def sample_population(
         draws=kept,
         values=values,
         unit_draws=unit_draws,
+        unit_log_means=unit_log_means,
         unit_log_likelihood=log_likelihood,
         point_ess=point_ess,
         combined_ess=np.array([points["combined_ess"] for points in data.points]),

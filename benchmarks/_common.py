@@ -1,10 +1,14 @@
-"""Shared pieces of the noise benchmarks: the classical peers and the Cramér-Rao bound."""
+"""Shared pieces of the benchmarks: the classical peers, the Cramér-Rao bound, and a
+recording reduced to what a fleet's population reads of it.
+
+bayescal is imported inside the functions that need it: the peer pipeline of
+``long_recording.py`` imports this module in its own timed process, which must not pay for
+JAX.
+"""
 
 import math
 
 import numpy as np
-
-from bayescal.models._components import increment_spectrum_shapes
 
 FLOOR = math.sqrt(2 * math.log(2) / math.pi)
 PARAMETERS = ("N", "B", "K")
@@ -14,6 +18,8 @@ def cramer_rao_bound(truth: dict, rate_hz: float, n_samples: int) -> dict:
     """Standard deviations of the Cramér-Rao bound for N, B, K from the Fisher information
     of the exact Gaussian likelihood of the increments, in its asymptotic (Whittle) form:
     F_ab = sum_j dS_j/da dS_j/db / S_j^2 over the Fourier frequencies of n - 1 increments."""
+    from bayescal.models._components import increment_spectrum_shapes
+
     length = n_samples - 1
     nu = np.arange(1, (length - 1) // 2 + 1) / length
     shapes = {
@@ -46,3 +52,28 @@ def allan_wls_fit(values: np.ndarray, rate_hz: float) -> dict:
     design = np.column_stack([1 / tau, np.full_like(tau, FLOOR**2), tau / 3]) * weight[:, None]
     squares, _ = nnls(design, variance * weight)
     return dict(zip(PARAMETERS, np.sqrt(squares), strict=True))
+
+
+def stand_in_recording(unit: int, run: int, *, bias_mean, bias_sd, log_draws=None, prior=None):
+    """A run of unit ``unit`` (``SN00`` ...) reduced to what the fleet's population reads of
+    it: its stored draws of the noise scales' logs (``log_draws``, with their fitting prior's
+    ``{name: (location, scale)}`` of the log) and its bias's conditional mean and sd at each
+    draw, as a 41 s gyro record at 100 Hz would give them."""
+    from bayescal.inference._population import RecordingDraws
+
+    log_draws, prior = log_draws or {}, prior or {}
+    return RecordingDraws(
+        source=f"unit{unit}-run{run}",
+        unit=f"SN{unit:02d}",
+        run=str(run + 1),
+        channel="gyro_x",
+        channel_unit="deg/s",
+        rate_hz=100.0,
+        n_samples=4096,
+        terms=("white", *(("rate_random_walk",) if "K" in log_draws else ())),
+        log_draws=log_draws,
+        prior_location={name: location for name, (location, _) in prior.items()},
+        prior_scale={name: scale for name, (_, scale) in prior.items()},
+        bias_mean=bias_mean,
+        bias_sd=bias_sd,
+    )

@@ -31,11 +31,11 @@ import math
 import time
 
 import numpy as np
+from _common import stand_in_recording
 from fleet_coverage import RANGES, RUNS, UNITS, clopper_pearson, draw_population
 from scipy import stats
 
 from bayescal.inference._population import (
-    RecordingDraws,
     bias_spread,
     fleet_data,
     sample_population,
@@ -58,20 +58,8 @@ def simulate_fleet(rng, sd_range, seed, units=UNITS):
             sd = rng.uniform(*sd_range)
             measured = bias + sd * rng.standard_normal()
             recordings.append(
-                RecordingDraws(
-                    source=f"unit{u}-run{r}",
-                    unit=f"SN{u:02d}",
-                    run=str(r + 1),
-                    channel="gyro_x",
-                    channel_unit="deg/s",
-                    rate_hz=100.0,
-                    n_samples=4096,
-                    terms=("white",),
-                    log_draws={},
-                    prior_location={},
-                    prior_scale={},
-                    bias_mean=np.full(DRAWS, measured),
-                    bias_sd=np.full(DRAWS, sd),
+                stand_in_recording(
+                    u, r, bias_mean=np.full(DRAWS, measured), bias_sd=np.full(DRAWS, sd)
                 )
             )
     return population, recordings

@@ -64,15 +64,12 @@ def _floats(column) -> np.ndarray:
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    # Written once (no NaN fill first): a pass over 10^7 values costs ~0.05 s.
-    out = np.empty(len(column))
+    out = np.full(len(column), np.nan)
     start = 0
     for chunk in pc.cast(column, pa.float64(), safe=False).chunks:
         size = len(chunk)
         validity, data = chunk.buffers()
-        if data is None:
-            out[start : start + size] = np.nan
-        else:
+        if data is not None:
             values = np.frombuffer(data, np.float64, count=chunk.offset + size)[chunk.offset :]
             out[start : start + size] = values
         if chunk.null_count and validity is not None:

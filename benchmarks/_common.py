@@ -18,14 +18,14 @@ def cramer_rao_bound(truth: dict, rate_hz: float, n_samples: int) -> dict:
     """Standard deviations of the Cramér-Rao bound for N, B, K from the Fisher information
     of the exact Gaussian likelihood of the increments, in its asymptotic (Whittle) form:
     F_ab = sum_j dS_j/da dS_j/db / S_j^2 over the Fourier frequencies of n - 1 increments."""
-    from bayescal.models._components import increment_spectrum_shapes
+    from bayescal.models.effects.bias_instability import BiasInstability
+    from bayescal.models.effects.rate_random_walk import RateRandomWalk
+    from bayescal.models.effects.white import White
 
     length = n_samples - 1
     nu = np.arange(1, (length - 1) // 2 + 1) / length
-    shapes = {
-        key: np.asarray(value) for key, value in increment_spectrum_shapes(nu, rate_hz).items()
-    }
-    basis = {"N": shapes["white"], "B": shapes["bias_instability"], "K": shapes["rate_random_walk"]}
+    terms = {"N": White, "B": BiasInstability, "K": RateRandomWalk}
+    basis = {p: np.asarray(term.spectrum(nu, rate_hz)) for p, term in terms.items()}
     spectrum = sum(truth[p] ** 2 * basis[p] for p in PARAMETERS)
     gradient = np.array([2 * truth[p] * basis[p] / spectrum for p in PARAMETERS])
     fisher = gradient @ gradient.T

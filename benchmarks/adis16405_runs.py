@@ -16,8 +16,7 @@ import numpy as np
 
 import bayescal as bc
 from bayescal.classical._noise import slope_readings
-from bayescal.models._terms import parse_terms
-from bayescal.recording._units import display_values
+from bayescal.models._terms import display_values, parse_terms
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 CHANNELS = (

@@ -128,7 +128,7 @@ def simulate(hidden, rng, seed):
                 phi = math.exp(-1 / (rate * tau))
                 drive = rng.standard_normal(n) * sigma * math.sqrt(1 - phi * phi)
                 values += lfilter([1.0], [1.0, -phi], drive)
-                truth[effect] = {"sigma_gm": sigma, "time_constant": tau}
+                truth[effect] = {"gm_sigma": sigma, "gm_tau": tau}
             case "rate_ramp":
                 r = amplitude() / duration * rng.choice([-1, 1])
                 values += r * t
@@ -150,23 +150,23 @@ def simulate(hidden, rng, seed):
 
 def _block_noise_covariance(truth, rate, n):
     """Covariance of the 128 block means of the recording's stochastic noise, from the truth."""
-    from bayescal.models._components import block_covariance_basis, component_weights
-    from bayescal.models._composite import LEVEL_BLOCKS
+    from bayescal.models._composite import LEVEL_BLOCKS, SLOT_COMPONENTS
     from bayescal.models.effects.gauss_markov import GaussMarkov
 
     edges = np.linspace(0, n, LEVEL_BLOCKS + 1).round().astype(np.int64)
     start, stop = edges[:-1], edges[1:]
-    weights = np.asarray(
-        component_weights(
-            N=WHITE_SD / math.sqrt(rate),
-            B=truth.get("bias_instability", {}).get("B", 0.0),
-            K=truth.get("rate_random_walk", {}).get("K", 0.0),
-        )
+    values = {
+        "N": WHITE_SD / math.sqrt(rate),
+        "B": truth.get("bias_instability", {}).get("B", 0.0),
+        "K": truth.get("rate_random_walk", {}).get("K", 0.0),
+    }
+    weights = np.asarray(SLOT_COMPONENTS.weights(values))
+    covariance = np.einsum(
+        "t,tij->ij", weights, SLOT_COMPONENTS.block_covariances(start, stop, rate)
     )
-    covariance = np.einsum("t,tij->ij", weights, block_covariance_basis(start, stop, rate))
     if "gauss_markov" in truth:
         gm = truth["gauss_markov"]
-        covariance += gm["sigma_gm"] ** 2 * GaussMarkov(gm["time_constant"]).block_covariance(
+        covariance += gm["gm_sigma"] ** 2 * GaussMarkov(gm["gm_tau"]).block_covariance(
             start, stop, rate
         )
     return covariance, start, stop
@@ -232,7 +232,7 @@ def expected_log_bayes_factors(truth, rate, n, temperature) -> dict:
                 information = _spectral_information(parameters["B"] ** 2 / angular, rate)
                 expected[effect] = information - schwarz
             case "gauss_markov":
-                sigma, tau = parameters["sigma_gm"], parameters["time_constant"]
+                sigma, tau = parameters["gm_sigma"], parameters["gm_tau"]
                 information = _spectral_information(
                     4 * sigma**2 * tau / (1 + (angular * tau) ** 2), rate
                 )

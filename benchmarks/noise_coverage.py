@@ -5,7 +5,8 @@ contrast, of the Student-t interval on the turn-on bias of the same records.
     python benchmarks/noise_coverage.py --rate 100 --samples 4096 --truth N=0.004,K=0.005
 
 The second is the record of ``fleet_coverage.py`` (41 s at 100 Hz, white noise and a rate
-random walk, the middle of its ranges): the model is the truth's terms.
+random walk, the middle of its ranges). The model is the truth's terms (any registered
+parameters, :data:`bayescal.models._terms.PARAMETERS`).
 
 Target (issue 3): the 90 % intervals of N and K contain the truth 86-94 % of the time over at
 least 200 records. Printed beside each coverage: the sd over the records of the z-score
@@ -25,10 +26,12 @@ import numpy as np
 from scipy import stats
 
 import bayescal as bc
+from bayescal.models._terms import TERM_OF_PARAMETER, parameter_unit
+
+UNIT = "deg/s"
 
 RATE = 10.0
 TRUTH = {"bias": 0.4, "N": 0.005, "B": 2e-3, "K": 3e-4}
-TERM_OF = {"N": "white", "B": "bias_instability", "K": "rate_random_walk"}
 
 
 def main() -> None:
@@ -44,8 +47,9 @@ def main() -> None:
     args = parser.parse_args()
     truth = {"bias": TRUTH["bias"]}
     truth |= {k: float(v) for k, v in (item.split("=") for item in args.truth.split(","))}
-    scales = tuple(name for name in TERM_OF if name in truth)
-    terms = tuple(TERM_OF[name] for name in scales)  # by default CLASSICAL_TERMS
+    scales = tuple(name for name in truth if name != "bias")
+    # The truth's terms (by default CLASSICAL_TERMS).
+    terms = tuple(dict.fromkeys(TERM_OF_PARAMETER[name] for name in scales))
 
     model = bc.NoiseModel(rate_hz=args.rate, **truth)
     names = (*scales, "bias")
@@ -71,8 +75,7 @@ def main() -> None:
     band = stats.binom.ppf([0.025, 0.975], count, 0.9) / count
     print(
         f"noise coverage: {count} simulations of {args.samples} samples at {args.rate:g} Hz "
-        f"({', '.join(f'{k}={v:g}' for k, v in truth.items() if k != 'bias')}; N in "
-        "deg/s/sqrt(Hz), B in deg/s, K in deg/s*sqrt(Hz)); "
+        f"({', '.join(f'{k}={v:g} {parameter_unit(k, UNIT)}' for k, v in truth.items())}); "
         f"{elapsed:.0f} s; {unhealthy} posterior(s) failed their health checks"
     )
     print(

@@ -20,10 +20,8 @@ from _common import PARAMETERS, allan_wls_fit, cramer_rao_bound
 import bayescal as bc
 from bayescal.inference._noise_posterior import noise_mode
 from bayescal.inference._priors import default_prior
-from bayescal.models._level import level_summary
-from bayescal.models._noise_problem import NoiseProblem
+from bayescal.models._noise_problem import NoiseProblem, noise_summaries
 from bayescal.models._terms import CLASSICAL_TERMS
-from bayescal.models._whittle import spectral_summary
 
 RATE = 10.0
 TRUTH = {"N": 0.005, "B": 2e-3, "K": 1e-4}
@@ -33,8 +31,7 @@ def map_estimate(values: np.ndarray, classical: bc.ClassicalNoise) -> dict:
     """bayescal's point estimate: the MAP of the default model, under the default prior
     (centred on the classical Allan deviation), in the channel's units."""
     problem = NoiseProblem(
-        spectral_summary(values, RATE),
-        level_summary(values, RATE),
+        *noise_summaries(values, RATE, CLASSICAL_TERMS),
         default_prior(CLASSICAL_TERMS, classical.allan),
     )
     mode = noise_mode(problem)

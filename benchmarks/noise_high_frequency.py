@@ -35,10 +35,8 @@ from scipy import signal, stats
 import bayescal as bc
 from bayescal.inference._noise_posterior import noise_mode
 from bayescal.inference._priors import default_prior
-from bayescal.models._level import level_summary
-from bayescal.models._noise_problem import NoiseProblem
+from bayescal.models._noise_problem import NoiseProblem, noise_summaries
 from bayescal.models._terms import CLASSICAL_TERMS
-from bayescal.models._whittle import spectral_summary
 
 RATE = 200.0
 N_TRUE = 0.01
@@ -97,8 +95,7 @@ def simulate(kind: str, n: int, seed: int) -> tuple[np.ndarray, dict]:
 def classical_model_n(values: np.ndarray, allan) -> float:
     """MAP of N in the classical model (white, bias instability, rate random walk)."""
     problem = NoiseProblem(
-        spectral_summary(values, RATE),
-        level_summary(values, RATE),
+        *noise_summaries(values, RATE, CLASSICAL_TERMS),
         default_prior(CLASSICAL_TERMS, allan),
     )
     mode = noise_mode(problem)

@@ -14,8 +14,13 @@ from scipy.signal import lfilter
 import bayescal as bc
 from bayescal.capabilities._discovery import AMBIGUOUS_LOG_BAYES_FACTOR
 from bayescal.inference._checks import TIME_BLOCKS
-from bayescal.models._components import block_covariance_basis, component_weights
-from bayescal.models._composite import LEVEL_BLOCKS, LevelNoise, level_coefficients, level_design
+from bayescal.models._composite import (
+    LEVEL_BLOCKS,
+    SLOT_COMPONENTS,
+    LevelNoise,
+    level_coefficients,
+    level_design,
+)
 from bayescal.models.effects.gauss_markov import GaussMarkov
 from bayescal.report._discovery import discovery_document
 
@@ -121,10 +126,15 @@ def test_gauss_markov_shapes_agree_with_each_other():
         weights = np.concatenate((-np.ones(m), np.ones(m))) / m
         correlation = np.correlate(weights, weights, mode="full")
         allan = 0.5 * float(np.sum(correlation * gamma[np.abs(np.arange(-2 * m + 1, 2 * m))]))
-        assert allan == pytest.approx(term.allan_variance(m / rate, 1.0), rel=1e-9)
+        values = {"gm_sigma": 1.0, "gm_tau": term.time_constant_s}
+        expected = float(GaussMarkov.allan_variance(m / rate, values, rate))
+        assert allan == pytest.approx(expected, rel=1e-9)
     increments = term.autocovariance(lags[1:-1], rate)
     second_difference = 2 * gamma[1:-1] - gamma[:-2] - gamma[2:]
-    np.testing.assert_allclose(increments, second_difference, rtol=1e-12)
+    # The second difference of the rate's autocovariance, numbers near 1, keeps their digits
+    # (1e-13 of them), not the increments'.
+    scale = np.max(np.abs(gamma))
+    np.testing.assert_allclose(increments, second_difference, rtol=1e-12, atol=1e-13 * scale)
 
 
 def test_cli_contract_and_outputs(run_cli, tmp_path):
@@ -212,8 +222,8 @@ def test_block_means_likelihood_splits_into_one_block_ahead_predictions():
     means, columns, start, stop = level_design(data, regressor, RATE)
     covariance = np.einsum(
         "t,tij->ij",
-        np.asarray(component_weights(N=white, K=walk_k)),
-        block_covariance_basis(start, stop, RATE),
+        np.asarray(SLOT_COMPONENTS.weights({"N": white, "K": walk_k})),
+        SLOT_COMPONENTS.block_covariances(start, stop, RATE),
     )
     design = np.column_stack([np.ones(LEVEL_BLOCKS), columns])
     precision = np.linalg.inv(covariance)
@@ -294,7 +304,7 @@ def test_a_flat_time_profile_samples_its_interval_within_the_record(monkeypatch)
             schwarz=-1e-6 * (log_t - math.log(30.0)) ** 2,
             spec=SimpleNamespace(regressor_names=lambda: []),
             beta=[],
-            noise={"G": 0.0},
+            noise={"gm_sigma": 0.0},
         )
 
     monkeypatch.setattr(_discovery, "fit_model", lambda context, spec: almost_flat(spec))

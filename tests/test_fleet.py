@@ -489,10 +489,9 @@ def joint_fit(manifest, fleet) -> dict:
     )
     from bayescal.inference._optimize import maximum_a_posteriori
     from bayescal.inference._population import bias_spread
-    from bayescal.models._level import bias_given_noise, level_summary
-    from bayescal.models._noise_problem import NoisePrior, NoiseProblem
+    from bayescal.models._level import bias_given_noise
+    from bayescal.models._noise_problem import NoisePrior, NoiseProblem, noise_summaries
     from bayescal.models._population import PopulationModel
-    from bayescal.models._whittle import spectral_summary
 
     recordings = fleet.recordings
     units = fleet.units
@@ -500,7 +499,7 @@ def joint_fit(manifest, fleet) -> dict:
     problems, means, unit_variances, owner = [], [], [], []
     for recording in recordings:
         values = np.load(recording.source)["gyro_x[deg/s]"]
-        problem = NoiseProblem(spectral_summary(values, 100.0), level_summary(values, 100.0), prior)
+        problem = NoiseProblem(*noise_summaries(values, 100.0, ("white",)), prior)
         mean, variance = bias_given_noise(problem.level, problem.variances(jnp.zeros(1)))
         problems.append(problem)
         means.append(float(mean))

@@ -17,8 +17,10 @@ import bayescal.models._whittle as whittle_module
 import bayescal.recording._series as series_module
 import bayescal.recording._stream as stream_module
 from bayescal.inference._checks import lag_one_check
-from bayescal.models._level import level_summary
+from bayescal.models._components import Components
+from bayescal.models._noise_problem import noise_summaries
 from bayescal.models._whittle import spectral_summary, whittle_log_likelihood
+from bayescal.models.effects._parameter import Context
 from bayescal.recording._levels import discrete_step
 from bayescal.recording._series import SpooledSeries, SpoolWriter
 from bayescal.recording._stream import stream_channel
@@ -100,10 +102,12 @@ def test_summaries_of_a_spooled_series_are_the_in_memory_ones(small_blocks, gapp
     assert memory_classical.n_samples == disk_classical.n_samples
     for name in ("bias", "bias_ci_low", "bias_ci_high", "std", "duration_s"):
         assert close(getattr(memory_classical, name), getattr(disk_classical, name)), name
-    memory_level, disk_level = level_summary(gapped, RATE), level_summary(disk, RATE)
+    terms = ("white", "bias_instability", "rate_random_walk")
+    (memory_spectrum, memory_level), (disk_spectrum, disk_level) = (
+        noise_summaries(values, RATE, terms) for values in (gapped, disk)
+    )
     assert close(memory_level.block_mean, disk_level.block_mean)
     assert np.array_equal(memory_level.basis, disk_level.basis)
-    memory_spectrum, disk_spectrum = spectral_summary(gapped, RATE), spectral_summary(disk, RATE)
     for name in ("count", "node_power", "node_count", "basis", "mean_increment"):
         assert close(getattr(memory_spectrum, name), getattr(disk_spectrum, name)), name
     autocovariance = np.array([2.0, -1.0, 0.0])
@@ -120,12 +124,15 @@ def test_equal_pieces_pool_their_bins_without_changing_the_likelihood(small_bloc
     """A gap-free run four pieces long gives one piece's bins, and its likelihood is the sum
     of the four pieces' likelihoods taken apart."""
     values = gyro(4 * (1 << 15))
-    pooled = spectral_summary(values, RATE)
-    pieces = [spectral_summary(values[k << 15 : (k + 1) << 15], RATE) for k in range(4)]
+    components = Components.of(("white", "output_filter"), Context(RATE))
+    pooled = spectral_summary(values, RATE, components=components)
+    pieces = [
+        spectral_summary(values[k << 15 : (k + 1) << 15], RATE, components=components)
+        for k in range(4)
+    ]
     assert pooled.n_bins == pieces[0].n_bins
     assert pooled.mean_increment.size == 4
-    variances = np.array([2.5e-3, 1e-10, 0.0, 0.0, 0.0, 0.0])[: pooled.basis.shape[0]]
-    variances[0] = 0.005**2 * RATE
+    variances = np.asarray(components.weights({"N": 0.005, "F": 1e-8}))
     total = float(np.sum(whittle_log_likelihood(pooled, variances)))
     apart = sum(float(np.sum(whittle_log_likelihood(p, variances))) for p in pieces)
     assert total == pytest.approx(apart, rel=1e-12)

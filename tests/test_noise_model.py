@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import bayescal as bc
-from bayescal.models.effects.output_filter import BIQUAD_RADIUS, OutputFilter, lowpass_gain
+from bayescal.models.effects.biquad_filter import BIQUAD_RADIUS, BiquadFilter
+from bayescal.models.effects.output_filter import OutputFilter
 
 RATE = 100.0
 N_SAMPLES = 2**14
@@ -19,9 +20,9 @@ TERMS = {
     "quantization": dict(Q=2e-4),
     "rate_ramp": dict(R=1e-4),
     "output_filter": dict(N=0.01, F=0.4),
-    "all": dict(N=0.01, K=2e-4, B=1e-3, Q=1e-4, R=1e-6, F=-0.2),
+    "all": dict(N=0.01, K=2e-4, B=1e-3, Q=1e-4, R=1e-6, F=0.2),
     "biquad_filter": dict(
-        N=0.01, lowpass=OutputFilter(shape="biquad", poles=(-0.6, 0.3), zeros=(0.7, 0.5))
+        N=0.01, **OutputFilter(shape="biquad", poles=(-0.6, 0.3), zeros=(0.7, 0.5)).values
     ),
 }
 
@@ -76,7 +77,8 @@ def test_a_biquad_is_the_second_order_section_scipy_filters_with():
     nu = np.linspace(0.0, 0.49, 50)
     _, response = signal.freqz(b, a, worN=nu * RATE, fs=RATE)
     expected = np.abs(response) ** 2 / np.abs(response[0]) ** 2
-    np.testing.assert_allclose(np.asarray(lowpass.gain(nu, RATE)), expected, rtol=1e-9, atol=1e-15)
+    gain = np.asarray(lowpass.shape_gain(nu, RATE))
+    np.testing.assert_allclose(gain, expected, rtol=1e-9, atol=1e-15)
     assert OutputFilter.from_values("biquad", lowpass.values).values == lowpass.values
 
 
@@ -86,10 +88,12 @@ def test_no_biquad_has_a_pole_or_zero_near_zero_frequency():
     z = 1 (a Gauss-Markov process disguised as the output filter) would step there: one at
     0.99 loses 28 % of the power at fs / 1000. And the radius is reached (a section with a
     pole pair on it drops by a factor of ten or more within the band)."""
-    coordinates = tuple(np.random.default_rng(0).uniform(-9.0, 9.0, (4, 20_000)))
-    near_zero = np.asarray(lowpass_gain("biquad", 1e-3, coordinates))
+    coordinates = np.random.default_rng(0).uniform(-9.0, 9.0, (4, 20_000))
+    names = [parameter.name for parameter in BiquadFilter.parameters]
+    values = dict(zip(names, np.tanh(coordinates), strict=True))  # the biquad's coordinate
+    near_zero = np.asarray(BiquadFilter.gain(1e-3, values, RATE))
     assert np.max(np.abs(near_zero - 1.0)) < 0.01
     assert BIQUAD_RADIUS <= 0.9
     nu = np.linspace(0.01, 0.5, 50)[:, None]
-    lowest = np.asarray(lowpass_gain("biquad", nu, coordinates)).min()
+    lowest = np.asarray(BiquadFilter.gain(nu, values, RATE)).min()
     assert lowest < 0.1

@@ -9,12 +9,7 @@ from scipy import fft
 from scipy.signal import windows
 
 import bayescal as bc
-from bayescal.models._components import (
-    SPECTRAL_COMPONENTS,
-    component_weights,
-    increment_autocovariance_shapes,
-    increment_spectrum_shapes,
-)
+from bayescal.models._components import Components
 from bayescal.models._whittle import (
     TAPER_FRACTION,
     _expected_periodogram,
@@ -22,14 +17,25 @@ from bayescal.models._whittle import (
     spectral_summary,
     whittle_log_likelihood,
 )
+from bayescal.models.effects._parameter import Context
 from bayescal.models.effects.bias_instability import BiasInstability
+from bayescal.models.effects.gauss_markov import GaussMarkov
 
 RATE = 100.0
 TRUE = {"N": 0.005, "B": 5e-4, "K": 5e-6, "Q": 1e-5, "F": 0.2}
+COMPONENTS = Components.of(
+    ("quantization", "white", "output_filter", "bias_instability", "rate_random_walk"),
+    Context(RATE),
+)
 
 
 def variances(**scale):
-    return np.asarray(component_weights(**{p: v * scale.get(p, 1.0) for p, v in TRUE.items()}))
+    values = {p: v * scale.get(p, 1.0) for p, v in TRUE.items()}
+    return np.asarray(COMPONENTS.weights(values))
+
+
+def summary_of(record, **options):
+    return spectral_summary(record, RATE, components=COMPONENTS, **options)
 
 
 @pytest.fixture(scope="module")
@@ -41,8 +47,8 @@ def test_binning_matches_every_frequency(record):
     """Log-likelihood differences between nearby models, binned and at every frequency, agree
     to within 1 % of their own statistical sd (the ordinates' scatter): the binning costs no
     information that matters."""
-    binned = spectral_summary(record, RATE)
-    exact = spectral_summary(record, RATE, bin_width=1e-12)
+    binned = summary_of(record)
+    exact = summary_of(record, bin_width=1e-12)
     assert binned.n_bins < exact.n_bins / 40
     base = variances()
     for change in ({"N": 1.01}, {"B": 1.5}, {"K": 3.0}, {"Q": 0.3, "N": 0.99}, {"F": 0.5}):
@@ -65,15 +71,15 @@ def test_a_spectral_zero_is_never_rewarded():
     """A model whose spectrum vanishes where the record has power loses likelihood, however
     steep its fall inside a bin: the binned terms' weights are never negative."""
     record = bc.NoiseModel(rate_hz=RATE, N=0.01).simulate(2**14, seed=1)
-    summary = spectral_summary(record, RATE)
-    white = np.asarray(component_weights(N=0.01))
+    summary = summary_of(record)
+    white = np.asarray(COMPONENTS.weights({"N": 0.01}))
     flat = float(np.sum(whittle_log_likelihood(summary, white)))
     nu = summary.node_frequency
+    rest = white.copy()
+    rest[summary.shaped] = 0.0
     for cutoff in (0.05, 0.2, 0.4):  # a brick wall: gain 1e-12 above the cutoff
         gain = np.where(nu < cutoff, 1.0, 1e-12)
-        walled = whittle_log_likelihood(
-            summary, white * np.array([0, 0, 1, 1, 1]), filtered=(gain, white[:2])
-        )
+        walled = whittle_log_likelihood(summary, rest, filtered=(gain, white[summary.shaped]))
         assert float(np.sum(walled)) < flat - 1e3 * (0.5 - cutoff)
 
 
@@ -92,29 +98,33 @@ def test_expected_periodogram_is_the_average_periodogram():
     centred = increments - (increments @ taper / taper.sum())[:, None]
     periodogram = np.abs(fft.rfft(taper * centred, axis=1)) ** 2 / np.sum(taper**2)
     index = np.arange(1, 40)
-    basis = _expected_periodogram(taper.size, RATE, TAPER_FRACTION, tuple(index.tolist()))
-    expected = np.asarray(component_weights(N=0.01, B=2e-3, K=1e-3, F=0.3)) @ basis
+    basis = _expected_periodogram(
+        taper.size, RATE, TAPER_FRACTION, tuple(index.tolist()), COMPONENTS.shapes
+    )
+    expected = np.asarray(COMPONENTS.weights({"N": 0.01, "B": 2e-3, "K": 1e-3, "F": 0.3})) @ basis
     mean = periodogram[:, index].mean(axis=0)
     standard_error = periodogram[:, index].std(axis=0) / np.sqrt(replicas)
     assert np.all(np.abs(mean - expected) < 4 * standard_error)
 
 
 def test_autocovariances_are_fourier_pairs_of_the_spectra():
+    """Every component's closed-form increment autocovariance against the numerical inverse
+    transform of its closed-form spectrum (a Gauss-Markov shape at three correlation times
+    among them)."""
     size = 2**15
     nu = np.arange(1, size // 2 + 1) / size
     weight = np.where(nu == 0.5, 0.5, 1.0)  # trapezoid rule; the zero-frequency end is added
-    shapes = increment_spectrum_shapes(nu, RATE)
-    at_zero = increment_spectrum_shapes(np.array([1e-12]), RATE)
     lags = np.arange(8)
-    autocovariance = increment_autocovariance_shapes(lags, RATE)
-    for term in SPECTRAL_COMPONENTS:
-        spectrum = np.asarray(shapes[term]) * weight
-        zero = 0.5 * float(np.asarray(at_zero[term])[0])
+    shapes = (*COMPONENTS.shapes, *(GaussMarkov(t) for t in (0.003, 0.1, 30.0)))
+    for shape in shapes:
+        spectrum = np.asarray(shape.spectrum(nu, RATE)) * weight
+        zero = 0.5 * float(np.asarray(shape.spectrum(np.array([1e-12]), RATE))[0])
         numeric = [
             2 * (zero + np.sum(spectrum * np.cos(2 * np.pi * nu * lag))) / size for lag in lags
         ]
-        scale = abs(autocovariance[term][0])
-        np.testing.assert_allclose(numeric, autocovariance[term], atol=1e-4 * scale)
+        autocovariance = shape.autocovariance(lags.astype(float), RATE)
+        scale = abs(autocovariance[0])
+        np.testing.assert_allclose(numeric, autocovariance, atol=1e-4 * scale, err_msg=str(shape))
 
 
 def test_flicker_difference_far_from_zero_uses_a_series_that_joins_the_direct_value():

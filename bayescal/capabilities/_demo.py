@@ -22,7 +22,8 @@ import math
 
 import numpy as np
 
-from ..models._noise_model import NoiseModel, parameter_unit
+from ..models._noise_model import NoiseModel
+from ..models._terms import parameter_unit
 
 RATE_HZ = 100.0
 GRAVITY = 9.80665  # m/s^2, standard gravity: the z axis points up on a still bench

@@ -52,12 +52,16 @@ from ..classical._allan import allan_deviation
 from ..inference._checks import CHECK_LEVEL, line_search, run_checks
 from ..inference._mcmc import batch_log_density, diagnose, sample_ensemble, summarize, walker_count
 from ..inference._optimize import maximum_a_posteriori
-from ..inference._priors import allan_reference_scales, default_prior
+from ..inference._priors import default_prior
 from ..inference._selection import select_noise_terms
 from ..models._composite import (
+    BASELINE_TERMS,
     MAX_REGRESSORS,
     NOISE_SLOTS,
+    SCALE_SLOTS,
+    SLOT_COMPONENTS,
     SLOT_OF,
+    SLOT_PARAMETERS,
     Design,
     LevelNoise,
     ModelFit,
@@ -73,18 +77,18 @@ from ..models._composite import (
     regressor_columns,
     shaped,
     slot_prior,
+    slot_reference_scales,
+    slot_values,
     slot_variances,
     slow_columns,
     summary_components,
 )
-from ..models._level import level_summary
-from ..models._noise_model import parameter_unit
+from ..models._noise_problem import noise_summaries
 from ..models._terms import (
-    BASELINE_TERMS,
     CANDIDATE_TERMS,
     FILTER_SHAPE_OF_TERM,
-    LOWPASS_PARAMETERS,
     PARAMETERS_OF_TERM,
+    parameter_unit,
 )
 from ..models._whittle import spectral_summary, whittle_log_likelihood
 from ..models.effects._base import GRID_POINTS, PARABOLIC_STEPS, Effect, SlotTerm
@@ -171,8 +175,7 @@ class Context:
     @classmethod
     def of(cls, data, unclipped: np.ndarray, clean: np.ndarray) -> "Context":
         allan = allan_deviation(clean, data.rate_hz, "octave")
-        scales = allan_reference_scales(allan)
-        scales["G"] = float(np.nanmax(allan.deviation)) * 2.0
+        scales = slot_reference_scales(allan)
         half = np.count_nonzero(np.isfinite(clean)) // 2
         return cls(data, scales, half, unclipped, clean)
 
@@ -220,12 +223,15 @@ def fit_model(context: "Context", spec: ModelSpec) -> ModelFit:
             spectral_summary(
                 values,
                 data.rate_hz,
+                components=SLOT_COMPONENTS,
                 regressors=regressors[:, : max(n_regressors, 1)],
                 extra_components=summary_components(data.rate_hz, time_constant),
             )
         )
         if context.lowpass is not None:
-            summary = shaped(summary, context.lowpass.gain(summary.node_frequency, data.rate_hz))
+            summary = shaped(
+                summary, context.lowpass.shape_gain(summary.node_frequency, data.rate_hz)
+            )
         context.summaries[key] = summary
     summary = context.summaries[key]
     location, scale, mask = slot_prior(spec, context.prior_scales)
@@ -236,10 +242,10 @@ def fit_model(context: "Context", spec: ModelSpec) -> ModelFit:
         scale,
         mask,
         regressor_mask,
-        np.asarray(10.0 * context.prior_scales["R"]),
+        np.asarray(context.prior_scales["R"]),
         np.asarray(context.lsb**2 / (12.0 * data.rate_hz)),
     )
-    lowered = design.location - 3.0 * design.mask * np.array([1, 1, 1, 1, 1, 0, 0])
+    lowered = design.location - 3.0 * design.mask * SCALE_SLOTS
     mode = maximum_a_posteriori(profiled_log_posterior, design, (design.location, lowered))
     theta, hessian, converged = mode.theta, mode.hessian, mode.converged
     pointwise, beta, precision = _profile_at(design, jnp.asarray(theta))
@@ -374,7 +380,7 @@ def search_time(context: "Context", make_spec, key: str) -> tuple[ModelFit, dict
         "estimates": [
             {
                 **dict(zip(fits[t].spec.regressor_names(), fits[t].beta, strict=True)),
-                "sigma_gm": fits[t].noise["G"],
+                "gm_sigma": fits[t].noise["gm_sigma"],
             }
             for t in times
         ],
@@ -597,8 +603,7 @@ def decide_output_filter(context: Context, baseline: tuple[str, ...]):
     values = context.clean
     allan = allan_deviation(values, data.rate_hz, "octave")
     selection = select_noise_terms(
-        spectral_summary(values, data.rate_hz),
-        level_summary(values, data.rate_hz),
+        *noise_summaries(values, data.rate_hz, ("white", *CANDIDATE_TERMS)),
         partial(default_prior, allan=allan),
         lsb=context.lsb,
         # Every stationary term competes: power a low-pass seems to take away near Nyquist
@@ -611,16 +616,17 @@ def decide_output_filter(context: Context, baseline: tuple[str, ...]):
         return None
     shape = FILTER_SHAPE_OF_TERM[chosen[0]]
     estimates = selection.estimates
-    names = ("F",) if shape == "one_tap" else LOWPASS_PARAMETERS[shape]
+    names = PARAMETERS_OF_TERM[chosen[0]]
     effect = OutputFilter.from_values(shape, {name: estimates[name][0] for name in names})
     parameters = {"shape": {"value": shape}}
     for name in names:
         value, sd = estimates[name]
+        low, high = selection.interval(name)
         parameters[name] = {
             "mean": value,
             "sd": sd,
-            "q05": value + stats.norm.ppf(0.05) * sd,
-            "q95": value + stats.norm.ppf(0.95) * sd,
+            "q05": low,
+            "q95": high,
             "unit": parameter_unit(name, data.unit),
         }
     trial = next(trial for trial in selection.trials if trial.term == chosen[0])
@@ -691,18 +697,11 @@ def sample_final(fit: ModelFit, data: DiscoveryData, *, seed: int = 0) -> FinalP
         )
     shape = theta.shape[:-1]
     draws, units = {}, {}
-    ramp_scale = float(fit.design.ramp_scale)
+    values = slot_values(jnp.asarray(theta), np.ones(len(NOISE_SLOTS)), fit.design.ramp_scale)
     for index in active:
-        slot = NOISE_SLOTS[index]
-        if slot == "R":
-            value = theta[..., index] * ramp_scale
-        elif slot == "F":
-            value = np.tanh(theta[..., index])
-        else:
-            value = np.exp(theta[..., index])
-        name = "sigma_gm" if slot == "G" else slot
-        draws[name] = value
-        units[name] = parameter_unit(name, data.unit)
+        parameter = SLOT_PARAMETERS[index]
+        draws[parameter.name] = np.asarray(values[parameter.name])
+        units[parameter.name] = parameter.unit_for(data.unit)
     _, scales, coefficient_units = regressor_columns(fit.spec, data)
     coefficient_names = fit.spec.regressor_names()
     coefficients = beta[:, :n_regressors] / np.where(scales > 0, scales, 1.0)

@@ -53,11 +53,18 @@ from ..inference._population import (
     resolved_parameters,
     spec_probabilities,
 )
-from ..models._noise_model import parameter_unit
-from ..models._terms import CLASSICAL_TERMS, PARAMETERS_OF_TERM, TERM_OF_PARAMETER, fleet_terms
+from ..models._terms import (
+    CLASSICAL_TERMS,
+    PARAMETERS_OF_TERM,
+    TERM_OF_PARAMETER,
+    card_values,
+    display_values,
+    fleet_terms,
+    parameter_unit,
+)
 from ..recording._manifest import Manifest, read_manifest
 from ..recording._sensor_cards import SensorCard, find_card
-from ..recording._units import card_value_in, display_values, parse_unit
+from ..recording._units import convert, parse_unit
 
 SPEC_PARAMETERS = ("N", "B", "K", "bias")
 CONNECT_TIMEOUT_S = 30
@@ -295,14 +302,9 @@ def _limit_in(requested: _Requested, channel_unit: str) -> Limit:
     value = requested.value
     if requested.unit is not None and requested.unit != target:
         try:
-            if name == "bias":
-                have, want = parse_unit(requested.unit), parse_unit(channel_unit)
-                if not (have.known and want.known and have.quantity == want.quantity):
-                    raise ValueError(f"'{requested.unit}' is not a unit of {channel_unit}")
-                value = value * have.to_si / want.to_si
-            else:
+            if name != "bias":
                 _check_family(requested.unit, channel_unit)
-                value = card_value_in(name, value, requested.unit, channel_unit)
+            value = convert(value, requested.unit, target)
         except ValueError as error:
             raise InputError(
                 f"spec '{requested.label}': {error}",
@@ -315,9 +317,9 @@ def _limit_in(requested: _Requested, channel_unit: str) -> Limit:
 
 def _card_limits(card: SensorCard, channel_unit: str) -> list[Limit]:
     try:
-        values = card.datasheet_values(channel_unit)
-    except (InputError, ValueError) as error:
-        raise InputError(f"spec {card.name}: {error}") from None
+        values = card_values(card, channel_unit)
+    except InputError as error:
+        raise InputError(f"spec {card.name}: {error.problem}", fix=error.fix) from None
     limits = []
     for p, (value, source) in values.items():
         unit = parameter_unit(p, channel_unit)

@@ -14,11 +14,16 @@ from ..inference._checks import noise_model_checker
 from ..inference._noise_posterior import NoisePosterior, sample_noise
 from ..inference._priors import card_prior, default_prior
 from ..inference._selection import TermSelection, select_noise_terms
-from ..models._level import level_summary
-from ..models._noise_model import parameter_unit
-from ..models._noise_problem import NoiseProblem
-from ..models._terms import AUTO, CANDIDATE_TERMS, DEFAULT_TERMS, check_terms, parse_terms
-from ..models._whittle import spectral_summary
+from ..models._noise_problem import NoiseProblem, noise_summaries
+from ..models._terms import (
+    AUTO,
+    CANDIDATE_TERMS,
+    DEFAULT_TERMS,
+    READINGS,
+    check_terms,
+    parameter_unit,
+    parse_terms,
+)
 from ..recording._levels import discrete_step
 from ..recording._sensor_cards import SensorCard, find_card
 
@@ -233,8 +238,8 @@ def noise_posterior(
     whose level the bias is (``values`` by default): what a calibration's static sections
     give; ``allan``: the Allan deviation of ``values`` at octave taus when already computed."""
     lsb = discrete_step(values)
-    spectral = spectral_summary(values, rate_hz)
-    level = level_summary(values if level_values is None else level_values, rate_hz)
+    family = ("white", *CANDIDATE_TERMS) if terms == AUTO else terms
+    spectral, level = noise_summaries(values, rate_hz, family, level_values)
     checker = noise_model_checker(spectral, values, unit, allan)
     selection = None
     if terms == AUTO:
@@ -326,7 +331,9 @@ def fit_noise(
     values, rate_hz, unit, channel, source, notes = _as_channel(y, rate_hz, unit, channel)
     terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
     try:
-        classical = classical_noise(values, rate_hz, confidence=confidence, taus=taus)
+        classical = classical_noise(
+            values, rate_hz, confidence=confidence, taus=taus, readings=READINGS
+        )
     except InputError as error:
         if source == "<array>":
             raise

@@ -39,9 +39,16 @@ from ..classical._thermal import classical_thermal
 from ..inference._mcmc import batch_log_density, diagnose, sample_ensemble, walker_count
 from ..inference._optimize import maximum_a_posteriori
 from ..inference._priors import default_prior
-from ..models._noise_model import parameter_unit
 from ..models._noise_problem import NoisePrior
-from ..models._terms import AUTO, check_terms, parse_terms
+from ..models._terms import (
+    AUTO,
+    PARAMETERS,
+    TERMS,
+    check_terms,
+    parameter_unit,
+    parse_terms,
+    term_parameters,
+)
 from ..models._thermal import (
     MAX_DEGREE,
     ThermalProblem,
@@ -53,6 +60,7 @@ from ..models._thermal import (
     record_spectrum,
     thermal_problem,
 )
+from ..models.effects._parameter import Context
 from ..models.effects.earth_rotation import earth_rate_on_axis
 from ..recording._units import parse_unit
 
@@ -176,7 +184,7 @@ def choose_degree(
     coefficients: scoring starts where every candidate is identified, and a degree the first
     half of the blocks cannot identify is no candidate (absent from the table)."""
     blocks = _blocks(record)[0].size
-    spectral = record_spectrum(record)
+    spectral = record_spectrum(record, noise_prior.terms)
     problems = {}
     for degree in range(MAX_DEGREE + 1):
         problem = thermal_problem(
@@ -415,18 +423,20 @@ class ThermalCalibration:
         periods = periods or gap_free_runs(values)
         offsets = list(offsets) if offsets is not None else [None] * len(periods)
         record = ThermalRecord(values, temperature, rate_hz, tuple(periods))
-        parameters = tuple(name for name in ("Q", "N", "F", "B", "K") if name in self.noise)
-        # The noise as the calibration measured it: log-normal around its posterior mean with
-        # the spread of its 90 % interval (F: normal on atanh).
+        parameters = tuple(
+            name for name in term_parameters(tuple(self.noise["terms"])) if name in self.noise
+        )
+        # The noise as the calibration measured it: normal in each parameter's coordinate
+        # around its posterior mean, with the spread of its 90 % interval.
+        context = Context(rate_hz, values.size / rate_hz)
         location, scale = [], []
         for name in parameters:
-            mean, low, high = (self.noise[name][key] for key in ("mean", "q05", "q95"))
-            if name == "F":
-                location.append(math.atanh(mean))
-                scale.append(max((math.atanh(high) - math.atanh(low)) / 3.29, 0.01))
-            else:
-                location.append(math.log(mean))
-                scale.append(max(math.log(high / low) / 3.29, 0.01))
+            mean, low, high = (
+                PARAMETERS[name].coordinate(self.noise[name][key], context)
+                for key in ("mean", "q05", "q95")
+            )
+            location.append(mean)
+            scale.append(max((high - low) / 3.29, 0.01))
         noise_prior = NoisePrior(
             np.array(location),
             np.array(scale),
@@ -626,9 +636,8 @@ def _check_noise(noise, source: str) -> None:
     terms = noise.get("terms")
     if not isinstance(terms, list) or not all(isinstance(term, str) for term in terms):
         raise _field_error(source, "noise.terms", "must be a list of noise term names")
-    for name in ("Q", "N", "F", "B", "K"):
-        if name not in noise:
-            continue
+    known = [name for name in term_parameters(_known_terms(terms, source)) if name in noise]
+    for name in known:
         entry = noise[name]
         if not isinstance(entry, dict):
             raise _field_error(source, f"noise.{name}", "must be an object with mean, q05, q95")
@@ -638,12 +647,30 @@ def _check_noise(noise, source: str) -> None:
                 raise _field_error(
                     source, f"noise.{name}.{key}", f"must be a finite number, not {value!r}"
                 )
-            inside = -1 < value < 1 if name == "F" else value > 0
-            if not inside:
-                what = "lie between -1 and 1" if name == "F" else "be positive"
-                raise _field_error(source, f"noise.{name}.{key}", f"must {what}, not {value!r}")
+            low, high = _free_bounds(name)
+            if not low < value < high:
+                raise _field_error(
+                    source, f"noise.{name}.{key}", f"must lie in ({low:g}, {high:g}), not {value!r}"
+                )
         if not entry["q05"] <= entry["q95"]:
             raise _field_error(source, f"noise.{name}", "has q05 above q95")
+
+
+def _known_terms(terms: list, source: str) -> tuple[str, ...]:
+    """The noise terms a calibration file names, each checked against the registry."""
+    unknown = [term for term in terms if term not in TERMS]
+    if unknown:
+        raise _field_error(source, "noise.terms", f"names an unknown term {unknown[0]!r}")
+    return tuple(terms)
+
+
+def _free_bounds(name: str) -> tuple[float, float]:
+    """A noise parameter's range where it does not depend on the record (F in (0, 1), a
+    scale positive); the widest range where it does."""
+    parameter = PARAMETERS[name]
+    if isinstance(parameter.span, str):
+        return (0.0 if parameter.link in ("log", "log_logit") else -math.inf), math.inf
+    return parameter.bounds(Context(1.0))
 
 
 def _check_document(document, source: str) -> None:

@@ -18,10 +18,9 @@ from ..classical._two_position import Section, check_sections, classical_two_pos
 from ..inference._noise_posterior import NoisePosterior
 from ..inference._priors import default_prior
 from ..inference._selection import TermSelection
-from ..models._components import SPECTRAL_COMPONENTS, component_weights
 from ..models._level import bias_given_noise, level_summary
 from ..models._terms import DEFAULT_TERMS, check_terms, parse_terms
-from ..models._two_position import offset_drift_weights
+from ..models._two_position import offset_drift_variance
 from ._noise import noise_posterior
 
 
@@ -73,15 +72,15 @@ def bayesian_two_position(
     rounding = lsb**2 / (12.0 * rate_hz)
     rng = np.random.default_rng(seed + 1)
 
+    components = noise.problem.components
     levels = {
-        name: level_summary(section.values, rate_hz)
+        name: level_summary(section.values, rate_hz, components)
         for name, section in (("up", up), ("down", down))
     }
-    drift = offset_drift_weights(gap_s, rate_hz) if gap_s else np.zeros(len(SPECTRAL_COMPONENTS))
 
     def level_draws(parameters, ramp):
-        weights = np.array(component_weights(**parameters))
-        weights[..., 0] += rounding
+        weights = np.array(components.weights(parameters))
+        weights[..., components.white] += rounding
         conditional = {
             name: [
                 np.asarray(v)
@@ -89,12 +88,11 @@ def bayesian_two_position(
             ]
             for name, level in levels.items()
         }
-        return conditional, weights @ drift
+        drift = offset_drift_variance(gap_s, parameters, rate_hz, noise.terms) if gap_s else 0.0
+        return conditional, np.asarray(drift)
 
     shape = next(iter(noise.draws.values())).shape
-    parameters = {
-        name: noise.draws[name] for name in ("N", "B", "K", "Q", "F") if name in noise.draws
-    }
+    parameters = {name: noise.draws[name] for name in noise.problem.parameters}
     conditional, drift_variance = level_draws(parameters, noise.draws.get("R", np.zeros(shape)))
     level_up = conditional["up"][0] + np.sqrt(conditional["up"][1]) * rng.standard_normal(shape)
     level_down = conditional["down"][0] + np.sqrt(conditional["down"][1]) * rng.standard_normal(

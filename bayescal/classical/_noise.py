@@ -33,7 +33,6 @@ import numpy as np
 from scipy import special
 
 from ..recording._series import finite_moments, is_spooled, series_size
-from ..recording._units import BIAS_INSTABILITY_FACTOR
 from ._allan import DeviationResult, allan_deviation
 from ._edf import deviation_interval
 
@@ -55,11 +54,6 @@ _SAMPLING_FACTOR = 2.0
 # long record's tight intervals would otherwise demote every reading. The fit checks of a
 # model use the same materiality (10 % in Allan deviation).
 _MATERIAL_EXCESS = 0.10
-
-# parameter -> (slope, c) of its Allan-deviation line sigma(tau) = c * parameter * tau**slope
-# (DESIGN.md table): Q sqrt(3)/tau, N/sqrt(tau), K sqrt(tau/3). The line crosses the value of
-# the parameter at tau = sqrt(3), 1 and 3 s, where IEEE 952 reads it.
-_SLOPE_LINES = {"Q": (-1.0, math.sqrt(3.0)), "N": (-0.5, 1.0), "K": (0.5, 1.0 / math.sqrt(3.0))}
 
 
 @dataclass(frozen=True)
@@ -85,6 +79,8 @@ class SlopeReading:
     """"reading" on a stretch of the term's slope, or "upper_bound" where there is none."""
     reason: str = ""
     """Why an upper bound replaced the reading (empty for a reading)."""
+    where: str = ""
+    """Where on the curve it was read, in words (empty for an upper bound)."""
 
 
 @dataclass(frozen=True)
@@ -128,7 +124,8 @@ class ClassicalNoise:
     t_interval : TIntervalCheck
         Whether the Student-t interval holds, and the factor to widen it by when not.
     slope_readings : dict
-        ``N``, ``B``, ``K``, ``Q`` -> :class:`SlopeReading` (IEEE Std 952).
+        Parameter (``N``, ``B``, ``K``, ``Q`` by default) -> :class:`SlopeReading` (IEEE Std
+        952).
     """
 
     n_samples: int
@@ -231,65 +228,126 @@ def _within_the_curve(allan: DeviationResult, low: float, scale: np.ndarray) -> 
     return bool(np.all(low * scale <= allowed))
 
 
-def _line_reading(allan: DeviationResult, parameter: str) -> SlopeReading:
-    slope, coefficient = _SLOPE_LINES[parameter]
-    tau = allan.tau
-    scale = coefficient * tau**slope
-    local = _local_slopes(allan)
-    if local.size:
-        best = int(np.argmin(np.abs(local - slope)))
-        if abs(local[best] - slope) <= _SLOPE_TOLERANCE:
-            pair = slice(best, best + 2)
-            # The geometric middle of the stretch, where its slope was measured.
-            read = [
-                float(np.exp(np.mean(np.log(values[pair] / scale[pair]))))
-                for values in (allan.deviation, allan.ci_low, allan.ci_high)
-            ]
-            where = math.sqrt(tau[best] * tau[best + 1])
-            if _within_the_curve(allan, read[1], scale):
-                return SlopeReading(*read, where, float(local[best]), "reading")
+FLICKER_FLOOR = math.sqrt(2 * math.log(2) / math.pi)
+"""0.664: the floor of the Allan deviation per unit B of flicker noise, IEEE Std 952 eq. (C.9)."""
+
+
+@dataclass(frozen=True)
+class LineReading:
+    """A term read on its line of the Allan deviation, sigma(tau) = coefficient * P *
+    tau**slope (the DESIGN.md table): it crosses the value of P at tau =
+    coefficient**(-1 / slope) s, where IEEE 952 reads it (Q: slope -1, coefficient sqrt(3);
+    N: -1/2, 1; K: +1/2, 1/sqrt(3); R: +1, 1/sqrt(2))."""
+
+    slope: float
+    coefficient: float
+    description: str
+    """The line and where it is read (``-1/2 line, extrapolated to tau = 1 s``)."""
+
+    def scale(self, tau) -> np.ndarray:
+        """The term's Allan deviation per unit parameter at ``tau``."""
+        return self.coefficient * np.asarray(tau, dtype=float) ** self.slope
+
+    def bound(self, allan: DeviationResult) -> float:
+        """The level of the term the measured curve allows: the least of sigma(tau) /
+        :meth:`scale` over its taus (a term's Allan variance is at most the total)."""
+        usable = np.isfinite(allan.deviation)
+        return float(np.min(allan.deviation[usable] / self.scale(allan.tau[usable])))
+
+    def read(self, allan: DeviationResult) -> SlopeReading:
+        """The reading on the stretch of the curve whose local slope is the line's, or the
+        curve's upper bound where there is none (module docstring)."""
+        slope, tau = self.slope, allan.tau
+        scale = self.scale(tau)
+        local = _local_slopes(allan)
+        if local.size:
+            best = int(np.argmin(np.abs(local - slope)))
+            if abs(local[best] - slope) <= _SLOPE_TOLERANCE:
+                pair = slice(best, best + 2)
+                # The geometric middle of the stretch, where its slope was measured.
+                read = [
+                    float(np.exp(np.mean(np.log(values[pair] / scale[pair]))))
+                    for values in (allan.deviation, allan.ci_low, allan.ci_high)
+                ]
+                where = math.sqrt(tau[best] * tau[best + 1])
+                if _within_the_curve(allan, read[1], scale):
+                    return SlopeReading(
+                        *read,
+                        where,
+                        float(local[best]),
+                        "reading",
+                        where=f"stretch of slope {local[best]:+.2f} at tau = {where:.3g} s on "
+                        f"the {self.description}",
+                    )
+                return _upper_bound(
+                    allan,
+                    scale,
+                    f"the stretch of slope {local[best]:+.2f} at tau = {where:.3g} s gives a "
+                    "term larger than the measured curve elsewhere: not the term's own slope",
+                )
+            return _upper_bound(allan, scale, f"no stretch of slope {slope:+g}")
+        return _upper_bound(allan, scale, "too few averaging times")
+
+
+@dataclass(frozen=True)
+class FloorReading:
+    """A term read off the flat floor of the Allan deviation, sigma = factor * P (B: factor
+    0.664, IEEE Std 952 eq. C.9)."""
+
+    factor: float
+
+    def scale(self, tau) -> np.ndarray:
+        """The term's Allan deviation per unit parameter at ``tau``: the factor."""
+        return np.full(np.shape(tau), self.factor)
+
+    def bound(self, allan: DeviationResult) -> float:
+        """The level the measured curve allows: its least value / factor."""
+        return float(np.min(allan.deviation[np.isfinite(allan.deviation)]) / self.factor)
+
+    def read(self, allan: DeviationResult) -> SlopeReading:
+        """The curve's minimum / factor where the curve is flat on both sides of it, or the
+        curve's upper bound where it is not (module docstring)."""
+        lowest = int(np.argmin(allan.deviation))
+        local = _local_slopes(allan)
+        scale = self.scale(allan.tau)
+        if not 0 < lowest < allan.tau.size - 1:
+            return _upper_bound(allan, scale, "the curve's minimum is at its end")
+        around = local[lowest - 1 : lowest + 1]
+        if np.any(np.abs(around) > _FLOOR_TOLERANCE):
             return _upper_bound(
                 allan,
                 scale,
-                f"the stretch of slope {local[best]:+.2f} at tau = {where:.3g} s gives a term "
-                "larger than the measured curve elsewhere: not the term's own slope",
+                f"the curve turns at its minimum (local slopes {around[0]:+.2f}, "
+                f"{around[1]:+.2f}) without flattening into a floor",
             )
-        return _upper_bound(allan, scale, f"no stretch of slope {slope:+g}")
-    return _upper_bound(allan, scale, "too few averaging times")
-
-
-def _floor_reading(allan: DeviationResult) -> SlopeReading:
-    lowest = int(np.argmin(allan.deviation))
-    local = _local_slopes(allan)
-    scale = np.full(allan.tau.shape, BIAS_INSTABILITY_FACTOR)
-    if not 0 < lowest < allan.tau.size - 1:
-        return _upper_bound(allan, scale, "the curve's minimum is at its end")
-    around = local[lowest - 1 : lowest + 1]
-    if np.any(np.abs(around) > _FLOOR_TOLERANCE):
-        return _upper_bound(
-            allan,
-            scale,
-            f"the curve turns at its minimum (local slopes {around[0]:+.2f}, {around[1]:+.2f}) "
-            "without flattening into a floor",
+        return SlopeReading(
+            float(allan.deviation[lowest] / self.factor),
+            float(allan.ci_low[lowest] / self.factor),
+            float(allan.ci_high[lowest] / self.factor),
+            float(allan.tau[lowest]),
+            float(around[np.argmax(np.abs(around))]),
+            "reading",
+            where=f"flat floor at tau = {allan.tau[lowest]:.3g} s / {self.factor:.3g}",
         )
-    return SlopeReading(
-        float(allan.deviation[lowest] / BIAS_INSTABILITY_FACTOR),
-        float(allan.ci_low[lowest] / BIAS_INSTABILITY_FACTOR),
-        float(allan.ci_high[lowest] / BIAS_INSTABILITY_FACTOR),
-        float(allan.tau[lowest]),
-        float(around[np.argmax(np.abs(around))]),
-        "reading",
-    )
 
 
-def slope_readings(allan: DeviationResult) -> dict[str, SlopeReading]:
-    """IEEE 952 readings of Q, N, B and K from an Allan deviation of one channel."""
-    return {
-        "Q": _line_reading(allan, "Q"),
-        "N": _line_reading(allan, "N"),
-        "B": _floor_reading(allan),
-        "K": _line_reading(allan, "K"),
-    }
+IEEE952_READINGS = {
+    "Q": LineReading(-1.0, math.sqrt(3.0), "-1 line, extrapolated to tau = sqrt(3) s"),
+    "N": LineReading(-0.5, 1.0, "-1/2 line, extrapolated to tau = 1 s"),
+    "B": FloorReading(FLICKER_FLOOR),
+    "K": LineReading(0.5, 1.0 / math.sqrt(3.0), "+1/2 line, extrapolated to tau = 3 s"),
+}
+"""IEEE Std 952-1997 Annex C's readings by parameter: Q on the -1 line at tau = sqrt(3) s, N
+on the -1/2 line at tau = 1 s, B from the flat floor / 0.664, K on the +1/2 line at tau =
+3 s. The noise terms of :mod:`bayescal.models.effects` name theirs among these."""
+
+
+def slope_readings(allan: DeviationResult, readings=None) -> dict[str, SlopeReading]:
+    """Readings of the noise parameters off an Allan deviation of one channel:
+    ``readings`` maps each parameter to its reading (:class:`LineReading`,
+    :class:`FloorReading`; :data:`IEEE952_READINGS` by default)."""
+    readings = IEEE952_READINGS if readings is None else readings
+    return {name: reading.read(allan) for name, reading in readings.items()}
 
 
 def t_interval_check(allan: DeviationResult, std: float, n_samples: int) -> TIntervalCheck:
@@ -305,7 +363,9 @@ def t_interval_check(allan: DeviationResult, std: float, n_samples: int) -> TInt
     return TIntervalCheck(valid, 1.0 if valid else ratio, ratio, low, high, float(allan.tau[index]))
 
 
-def classical_noise(y, rate: float, *, confidence: float = 0.95, taus="octave") -> ClassicalNoise:
+def classical_noise(
+    y, rate: float, *, confidence: float = 0.95, taus="octave", readings=None
+) -> ClassicalNoise:
     """Classical noise summary of one static channel: mean with its Student-t interval and
     whether that holds, the Allan deviation, and the IEEE Std 952 slope readings.
 
@@ -320,6 +380,10 @@ def classical_noise(y, rate: float, *, confidence: float = 0.95, taus="octave") 
         Confidence of the intervals.
     taus : "octave", "decade", "all", int or array
         Averaging times of the Allan deviation (:func:`allan_deviation`).
+    readings : dict, optional
+        Parameter -> its reading off the Allan deviation (:class:`LineReading`,
+        :class:`FloorReading`); IEEE Std 952's Q, N, B and K by default
+        (:data:`IEEE952_READINGS`).
 
     Returns
     -------
@@ -353,5 +417,5 @@ def classical_noise(y, rate: float, *, confidence: float = 0.95, taus="octave") 
         confidence=float(confidence),
         allan=allan,
         t_interval=t_interval_check(allan, std, n),
-        slope_readings=slope_readings(allan),
+        slope_readings=slope_readings(allan, readings),
     )

@@ -79,7 +79,7 @@ def _discover(
 
 def _simulation_baseline(args) -> tuple[tuple[str, ...], dict]:
     """Discover on the user's simulation from white noise: what it holds is the baseline."""
-    from ..models._terms import BASELINE_TERMS
+    from ..models._composite import BASELINE_TERMS
 
     # Only the names of what the simulation holds are used: no posterior of its parameters.
     found = _discover(args, args.sim, ("white",), max_effects=args.max_effects, posterior=False)
@@ -95,7 +95,7 @@ def _simulation_baseline(args) -> tuple[tuple[str, ...], dict]:
 
 
 def _check_baseline(baseline) -> None:
-    from ..models._terms import BASELINE_TERMS
+    from ..models._composite import BASELINE_TERMS
 
     unknown = [term for term in baseline if term not in BASELINE_TERMS]
     if unknown:

@@ -14,10 +14,30 @@ import signal
 import sys
 
 from .._errors import BayescalError
-from . import _discover, _fleet, _multi_position, _noise, _report, _sensors, _thermal, _two_position
+from . import (
+    _discover,
+    _fleet,
+    _multi_position,
+    _noise,
+    _report,
+    _sensors,
+    _terms,
+    _thermal,
+    _two_position,
+)
 
 INTERNAL_ERROR = 3
-COMMANDS = (_noise, _two_position, _thermal, _report, _multi_position, _discover, _sensors, _fleet)
+COMMANDS = (
+    _noise,
+    _two_position,
+    _thermal,
+    _report,
+    _multi_position,
+    _discover,
+    _sensors,
+    _terms,
+    _fleet,
+)
 
 
 class _Parser(argparse.ArgumentParser):

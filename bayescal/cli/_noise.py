@@ -87,10 +87,8 @@ def add_parser(commands) -> None:
         "--terms",
         default=DEFAULT_TERMS,
         help="noise terms beside the bias: auto (the default: white noise and every term "
-        "the record holds decisive evidence for), or a list of white, bias_instability "
-        "(flicker), rate_random_walk (rrw), quantization, rate_ramp (ramp), output_filter "
-        "(one-tap), decimation_filter, butterworth_filter, biquad_filter (a second-order "
-        "section), or all",
+        "the record holds decisive evidence for), a comma-separated list of terms "
+        "('bayescal terms' lists them and their other names), or all",
     )
     bayes.add_argument(
         "--sensor",

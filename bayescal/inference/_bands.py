@@ -25,7 +25,6 @@ from ._noise_posterior import NoisePosterior, noise_model
 
 BAND_LEVEL = 0.90
 BAND_DRAWS = 400
-_NOISE_PARAMETERS = ("Q", "N", "B", "K", "R", "F")
 
 
 def draw_subset(fit: NoisePosterior, count: int, seed: int) -> dict[str, np.ndarray]:
@@ -44,9 +43,7 @@ def model_allan_deviation(fit: NoisePosterior, draws: dict[str, np.ndarray], tau
     if fit.problem.shape is not None:
         variance = np.stack([np.asarray(m.allan_variance(tau)) for m in fit.models(draws)])
     else:
-        batch = {
-            name: jnp.asarray(draws[name])[:, None] for name in _NOISE_PARAMETERS if name in draws
-        }
+        batch = {name: jnp.asarray(draws[name])[:, None] for name in fit.problem.parameters}
         model = noise_model(fit.problem, batch)
         variance = np.asarray(model.allan_variance(jnp.asarray(tau)[None, :]))
     return np.sqrt(np.maximum(variance, 0.0))
@@ -105,11 +102,10 @@ def spectrum_band(
     rate = spectral.rate_hz
     sample = draw_subset(fit, draws, seed)
     count = np.asarray(spectral.count, dtype=float)
-    nodes = spectral.node_frequency
     expected = (
         np.stack(  # (draws, bins): the mean expected periodogram over each bin
             [
-                expected_power(spectral, *model.whittle_weights(nodes))
+                expected_power(spectral, *model.whittle_weights(spectral))
                 for model in fit.models(sample)
             ]
         )

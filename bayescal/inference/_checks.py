@@ -22,10 +22,10 @@ from ..models._composite import (
     bin_ratios,
     block_covariance,
     block_means,
+    model_allan_exponents,
     model_allan_variance,
 )
 from ..models._whittle import tukey_window
-from ..models.effects.gauss_markov import GaussMarkov
 from ..models.effects.outliers import robust_scores
 from ..recording._levels import discrete_step, rail_check
 from ..recording._series import blocks, finite_moments
@@ -40,26 +40,6 @@ def _bonferroni(p_values) -> tuple[float, int]:
     p_values = np.asarray(p_values, dtype=float)
     worst = int(np.nanargmin(p_values))
     return float(min(1.0, p_values[worst] * np.count_nonzero(np.isfinite(p_values)))), worst
-
-
-def dominant_exponent(noise: dict, tau, gauss_markov_s: float = 0.0) -> list[int]:
-    """Power-law exponent alpha of S_y(f) of the model term with the largest Allan variance at
-    each tau (a Gauss-Markov term counts as a random walk below its time constant, as white
-    noise above it). ``noise``: the model's N, B, K, Q, R (and G, the Gauss-Markov sigma)."""
-    terms = [
-        (2, 3 * noise.get("Q", 0.0) ** 2 / tau**2),
-        (0, noise["N"] ** 2 / tau),
-        (-1, 2 * math.log(2) / math.pi * noise.get("B", 0.0) ** 2 + 0 * tau),
-        (-2, noise.get("K", 0.0) ** 2 * tau / 3 + noise.get("R", 0.0) ** 2 * tau**2 / 2),
-    ]
-    if noise.get("G", 0.0) > 0:
-        variance = GaussMarkov(gauss_markov_s).allan_variance(tau, noise["G"])
-        below = tau < gauss_markov_s
-        terms.append((-2, np.where(below, variance, 0.0)))
-        terms.append((0, np.where(below, 0.0, variance)))
-    exponents = np.array([alpha for alpha, _ in terms])
-    values = np.stack([np.broadcast_to(value, np.shape(tau)) for _, value in terms])
-    return exponents[np.argmax(values, axis=0)].tolist()
 
 
 def allan_check(
@@ -130,8 +110,8 @@ def _allan_check(fit: ModelFit, rate_hz: float, unit: str) -> dict:
         fit.residual,
         rate_hz,
         unit,
-        lambda tau: model_allan_variance(fit, tau, rate_hz),
-        lambda tau: dominant_exponent(fit.noise, tau, fit.spec.gauss_markov_s),
+        lambda tau: model_allan_variance(fit, tau),
+        lambda tau: model_allan_exponents(fit, tau),
     )
 
 
@@ -458,16 +438,15 @@ def noise_model_checker(summary, values, unit: str, allan=None) -> Callable[...,
     increments = _increment_sums(values)
 
     def check(model) -> list[dict]:
-        weights = model.whittle_weights(summary.node_frequency)
+        weights = model.whittle_weights(summary)
         expected = np.asarray(expected_power(summary, *weights)) / summary.count
-        noise = {"N": model.N, "B": model.B, "K": model.K, "Q": model.Q, "R": model.R}
         checks = [
             allan_check(
                 values,
                 rate_hz,
                 unit,
                 lambda tau: np.asarray(model.allan_variance(tau)),
-                lambda tau: dominant_exponent(noise, tau),
+                model.allan_exponents,
                 allan,
                 count,
             ),

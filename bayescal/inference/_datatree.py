@@ -5,7 +5,7 @@ from importlib.metadata import version
 
 import numpy as np
 
-from ..models._noise_model import parameter_unit
+from ..models._terms import parameter_unit
 from ._noise_posterior import NoisePosterior
 
 

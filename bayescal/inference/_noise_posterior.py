@@ -13,31 +13,36 @@ from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from ..models._level import bias_given_noise
 from ..models._noise_model import NoiseModel
 from ..models._noise_problem import NoiseProblem
-from ..models._terms import LOWPASS_PARAMETERS
-from ..models.effects.output_filter import OutputFilter
+from ..models._terms import PARAMETERS, TERMS
 from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
 from ._optimize import Mode, maximum_a_posteriori
+
+
+def _scales(problem: NoiseProblem) -> list[bool]:
+    """Which coordinates are a stochastic term's scale (the first parameter of a term that
+    is neither a low-pass shape nor the ramp)."""
+    scales = {
+        TERMS[name].parameters[0].name
+        for name in problem.terms
+        if TERMS[name].filter_shape in (None, "one_tap") and TERMS[name].mean_rate is None
+    }
+    return [name in scales for name in problem.parameters]
 
 
 def noise_mode(problem: NoiseProblem) -> Mode:
     """The MAP from two starts — the prior centres (the Allan bounds) and a point well below
     them, where the terms a record does not hold sit."""
     base = jnp.asarray(problem.prior.location)
-    lowered = base - 3.0 * jnp.array([p in ("N", "B", "K", "Q", "F") for p in problem.parameters])
+    lowered = base - 3.0 * jnp.array(_scales(problem))
     return maximum_a_posteriori(NoiseProblem.log_posterior, problem, (base, lowered))
 
 
 def noise_model(problem: NoiseProblem, values: dict) -> NoiseModel:
-    """The :class:`NoiseModel` of ``problem`` at parameter ``values`` (natural units; arrays
-    broadcast, except a low-pass filter's, which are numbers), with the record's LSB."""
-    noise = {name: values[name] for name in ("N", "B", "K", "Q", "R", "F") if name in values}
-    shape = problem.shape
-    # A model of the term search whose filter is masked off passes everything.
-    present = shape is not None and LOWPASS_PARAMETERS[shape][0] in values
-    lowpass = OutputFilter.from_values(shape, values) if present else None
-    return NoiseModel(
-        rate_hz=problem.spectral.rate_hz, **noise, lowpass=lowpass, lsb=float(problem.lsb)
-    )
+    """The :class:`NoiseModel` of ``problem`` at parameter ``values`` (natural units, of the
+    terms switched on; arrays broadcast, except a low-pass filter's, which are numbers), with
+    the record's LSB."""
+    noise = {name: values[name] for name in problem.parameters if name in values}
+    return NoiseModel(problem.spectral.rate_hz, lsb=float(problem.lsb), **noise)
 
 
 class ParameterSummary(eqx.Module):
@@ -157,35 +162,20 @@ def sample_noise(
     )
 
 
-def _slope(name: str, values: dict, rate_hz: float, prior) -> float:
-    """d(value) / d(coordinate) of a parameter at ``values``: the delta method's factor."""
-    if name == "R":
-        return float(prior.ramp_scale)
-    if name == "F":
-        return values["F"] * (1.0 - values["F"])
-    if name in ("filter_length", "filter_order"):  # 1 + e^coordinate
-        return values[name] - 1.0
-    if name == "filter_cutoff":
-        return values[name] * (1.0 - 2.0 * values[name] / rate_hz)
-    if name == "filter_warping":
-        return values[name] * (1.0 - values[name])
-    if name.startswith(("filter_pole", "filter_zero")):
-        return 1.0 - values[name] ** 2  # k = tanh(coordinate)
-    return values[name]  # a log coordinate
-
-
 def map_summary(problem: NoiseProblem, estimate: Mode) -> tuple[dict, dict]:
     """MAP values and their Laplace sds (delta method) in the channel's units, the bias
     included (its conditional sd, widened by the ramp's uncertainty when R is fitted)."""
     values = {name: float(v) for name, v in problem.natural(jnp.asarray(estimate.theta)).items()}
+    context = problem.context
     spread = {}
     for i, name in enumerate(problem.parameters):
         sd = math.sqrt(max(estimate.covariance[i, i], 0.0))
-        spread[name] = sd * _slope(name, values, problem.spectral.rate_hz, problem.prior)
+        spread[name] = sd * float(PARAMETERS[name].slope(values[name], context))
     mean, variance, per_ramp = (
         float(value) for value in _bias_at(problem, jnp.asarray(estimate.theta))
     )
-    if "R" in problem.parameters:
-        variance += per_ramp**2 * spread["R"] ** 2
+    for name in problem.terms:
+        if TERMS[name].mean_rate:
+            variance += per_ramp**2 * spread[TERMS[name].mean_rate] ** 2
     values["bias"], spread["bias"] = mean, math.sqrt(variance)
     return values, spread

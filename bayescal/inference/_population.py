@@ -751,7 +751,7 @@ def population_datatree(posterior: PopulationPosterior, unit: str, *, source: st
 
     import arviz_base
 
-    from ..models._noise_model import parameter_unit
+    from ..models._terms import parameter_unit
 
     shape = posterior.draws.shape[:2]
     values = posterior.values

@@ -40,13 +40,21 @@ from dataclasses import dataclass
 
 import equinox as eqx
 import numpy as np
+from scipy import stats
 
 from .._errors import InputError
 from ..models._level import LevelSummary
 from ..models._noise_model import NoiseModel
 from ..models._noise_problem import NoisePrior, NoiseProblem
-from ..models._terms import ALL_TERMS, CANDIDATE_TERMS, FILTER_SHAPE_OF_TERM, PARAMETERS_OF_TERM
+from ..models._terms import (
+    ALL_TERMS,
+    CANDIDATE_TERMS,
+    FILTER_SHAPE_OF_TERM,
+    PARAMETERS,
+    PARAMETERS_OF_TERM,
+)
 from ..models._whittle import SpectralSummary
+from ..models.effects._parameter import Context
 from ._noise_posterior import map_summary, noise_mode, noise_model
 from ._optimize import Mode
 
@@ -81,7 +89,17 @@ class TermSelection:
     estimates: dict
     """The chosen model's parameters at its MAP: name -> (value, Laplace sd), in their
     units."""
+    context: Context
+    """What the parameters' ranges depend on (the record's rate and length, the ramp's
+    scale)."""
     threshold: float = DECISIVE_LOG_BAYES_FACTOR
+
+    def interval(self, name: str, level: float = 0.90) -> tuple[float, float]:
+        """The Laplace interval of parameter ``name`` at ``level``, taken in its coordinate
+        (:meth:`~bayescal.models.effects._parameter.Parameter.interval`): inside its range."""
+        value, sd = self.estimates[name]
+        z = float(stats.norm.ppf(0.5 + level / 2))
+        return PARAMETERS[name].interval(value, sd, self.context, z)
 
     @property
     def table(self) -> list[dict]:
@@ -235,6 +253,7 @@ def select_noise_terms(
         trials=tuple(_trial(families, model, t, threshold, reasons.get(t, "")) for t in candidates),
         log_evidence=families.log_evidence(model),
         estimates=families.estimates(model),
+        context=families.fits[model][0].context,
         threshold=threshold,
     )
 

@@ -1,54 +1,101 @@
-"""The spectral components of the stationary noise model: one per noise term, in a fixed
-order that every likelihood and covariance of bayescal shares.
+"""The spectral components of a noise model: each term's fixed shapes of the increments'
+spectrum, with their weights (:meth:`~bayescal.models.effects._base.NoiseTerm.components`).
 
-Each component is a fixed shape times a weight (:func:`component_weights`); the output filter
-splits the white noise into a lag-zero and a lag-one part, so that N keeps its meaning.
+A record's likelihoods take the expected periodogram (:mod:`._whittle`) and the block-mean
+covariance (:mod:`._level`) of every component once, and at each draw only the weights.
+:class:`Components` lists a family of terms' components in one order that the summaries and
+the weights share; the output filter's one-tap term splits the white noise into a lag-zero
+and a lag-one component, so that N keeps its meaning.
 """
 
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
-from .effects.bias_instability import BiasInstability
-from .effects.output_filter import OutputFilter
-from .effects.quantization import Quantization
-from .effects.rate_random_walk import RateRandomWalk
+from ._terms import NOISE_TERMS, TERMS
+from .effects._parameter import Context
 from .effects.white import White
 
-SPECTRAL_TERMS = (White, OutputFilter, BiasInstability, RateRandomWalk, Quantization)
-"""The terms with a component of stationary increments, in the order of the components."""
-SPECTRAL_COMPONENTS = tuple(term.name for term in SPECTRAL_TERMS)
 
+class Components(eqx.Module):
+    """The components of the terms ``names`` (those with any) for a record, in the registry's
+    order."""
 
-def component_weights(N=0.0, B=0.0, K=0.0, Q=0.0, F=0.0):
-    """Weights of :data:`SPECTRAL_COMPONENTS` for the given parameters (arrays broadcast,
-    the components on the last axis)."""
-    # The filter's taps once, for the two components it splits white noise into.
-    taps = OutputFilter.taps(F)
-    weights = (
-        White.weight(N, taps),
-        OutputFilter.weight(N, taps),
-        BiasInstability.weight(B),
-        RateRandomWalk.weight(K),
-        Quantization.weight(Q),
-    )
-    return jnp.stack(jnp.broadcast_arrays(*weights), axis=-1)
+    terms: tuple = eqx.field(static=True)
+    """The terms with components, in order."""
+    shapes: tuple = eqx.field(static=True)
+    """Every component, the terms' in turn: objects with ``autocovariance``, ``spectrum``,
+    ``block_covariance`` and ``long_memory``."""
+    counts: tuple[int, ...] = eqx.field(static=True)
+    """How many components each term has."""
 
+    @classmethod
+    def of(cls, names, context: Context) -> "Components":
+        """The components of the terms ``names`` (registry names) for a record."""
+        wanted = set(names)
+        terms, shapes, counts = [], [], []
+        for term in NOISE_TERMS:
+            parts = term.components(context) if term.name in wanted else ()
+            if parts:
+                terms.append(term)
+                shapes += parts
+                counts.append(len(parts))
+        return cls(tuple(terms), tuple(shapes), tuple(counts))
 
-def increment_spectrum_shapes(nu, rate_hz) -> dict:
-    """Two-sided spectra of the sample increments d_k = y_{k+1} - y_k per unit weight of each
-    component, at ``nu`` cycles per sample (0 < nu <= 1/2)."""
-    return {term.name: term.spectrum(nu, rate_hz) for term in SPECTRAL_TERMS}
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(term.name for term in self.terms)
 
+    def slice_of(self, name: str) -> slice:
+        """Where the components of term ``name`` lie."""
+        index = self.names.index(name)
+        start = sum(self.counts[:index])
+        return slice(start, start + self.counts[index])
 
-def increment_autocovariance_shapes(lags, rate_hz) -> dict:
-    """Autocovariances of the increments at integer ``lags`` per unit weight of each component
-    (NumPy): the Fourier pairs of :func:`increment_spectrum_shapes`."""
-    lags = np.abs(np.asarray(lags, dtype=float))
-    return {term.name: term.autocovariance(lags, rate_hz) for term in SPECTRAL_TERMS}
+    @property
+    def white(self) -> int:
+        """The index of the white noise's component (the rounding floor's too)."""
+        return self.slice_of(White.name).start
 
+    @property
+    def shaped(self) -> np.ndarray:
+        """Indices of the components an output filter's low-pass shapes: the white noise's
+        two (its lag-zero and the one-tap filter's lag-one part)."""
+        indices = [
+            np.arange(len(self.shapes))[self.slice_of(name)]
+            for name in self.names
+            if TERMS[name].filtered
+        ]
+        return np.concatenate(indices) if indices else np.zeros(0, dtype=int)
 
-def block_covariance_basis(start: np.ndarray, stop: np.ndarray, rate_hz: float) -> np.ndarray:
-    """(components, blocks, blocks): covariance of the means of samples [start, stop) per unit
-    weight of each component, the nonstationary terms started at sample 0."""
-    return np.stack([term.block_covariance(start, stop, rate_hz) for term in SPECTRAL_TERMS])
+    def weights(self, values: dict):
+        """(..., components): each component's weight at ``values`` (parameters by name;
+        arrays broadcast); zero for a term whose parameters ``values`` lacks."""
+        batch = jnp.broadcast_shapes(*(jnp.shape(v) for v in values.values()))
+        parts = []
+        for term, count in zip(self.terms, self.counts, strict=True):
+            present = all(p.name in values for p in term.parameters)
+            part = (
+                term.weights(values, self.shapes[self.slice_of(term.name)])
+                if present
+                else jnp.zeros(count)
+            )
+            parts.append(jnp.broadcast_to(part, (*batch, count)))
+        return jnp.concatenate(parts, axis=-1)
+
+    def increment_spectra(self, nu, rate_hz: float) -> jnp.ndarray:
+        """(..., components): each component's two-sided spectrum of the increments per unit
+        weight at ``nu`` cycles per sample."""
+        return jnp.stack([shape.spectrum(nu, rate_hz) for shape in self.shapes], axis=-1)
+
+    def increment_autocovariances(self, lags, rate_hz: float) -> np.ndarray:
+        """(components, lags): each component's autocovariance of the increments per unit
+        weight at integer ``lags`` (numpy)."""
+        lags = np.abs(np.asarray(lags, dtype=float))
+        return np.stack([np.asarray(shape.autocovariance(lags, rate_hz)) for shape in self.shapes])
+
+    def block_covariances(self, start: np.ndarray, stop: np.ndarray, rate_hz: float) -> np.ndarray:
+        """(components, blocks, blocks): covariance of the means of samples [start, stop) per
+        unit weight of each component, the nonstationary terms started at sample 0."""
+        return np.stack([shape.block_covariance(start, stop, rate_hz) for shape in self.shapes])

@@ -1,10 +1,12 @@
 """The composite model discovery grows: the stationary noise terms, deterministic terms of
 the mean and sample effects (the catalogue, :mod:`.effects`) of one static channel.
 
-Layout. The noise coordinates sit in fixed slots — log N, log B, log K, log Q, log sigma of a
-Gauss-Markov term, the ramp R / scale, atanh of the output filter F — and the regression
-coefficients in MAX_REGRESSORS columns; a model switches slots and columns on or off with
-masks, so that every model of a recording shares one compiled likelihood.
+Layout. The noise coordinates sit in fixed slots, one per noise term the search may add, each
+in its term's coordinate (:class:`~bayescal.models.effects._parameter.Parameter`) — log N,
+log B, log K, log Q, log sigma of a Gauss-Markov term, the ramp R / scale, the logit of the
+one-tap output filter's F — and the regression coefficients in MAX_REGRESSORS columns; a model
+switches slots and columns on or off with masks, so that every model of a recording shares one
+compiled likelihood.
 
 Likelihood. The Whittle likelihood of the increments (:mod:`._whittle`) of the data minus the
 deterministic terms, with the noise terms' exact expected periodogram; the coefficients enter
@@ -25,12 +27,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
-from ._components import block_covariance_basis, component_weights
+from ._components import Components
 from ._noise_model import NoiseModel
 from ._noise_problem import PRIOR_LOG_SD
 from ._whittle import expected_power, regression_coefficients, whittle_log_likelihood
 from .effects._base import Effect, RegressionTerm, SlotTerm
 from .effects._catalogue import CATALOGUE, SEARCHED
+from .effects._parameter import Context
 from .effects.bias_instability import BiasInstability
 from .effects.gauss_markov import GaussMarkov
 from .effects.outliers import Outliers
@@ -41,19 +44,33 @@ from .effects.rate_random_walk import RateRandomWalk
 from .effects.saturation import Saturation
 from .effects.white import White
 
-NOISE_SLOTS = ("N", "B", "K", "Q", "G", "R", "F")
-"""The sampled noise coordinates: log N, log B, log K, log Q, log sigma of a Gauss-Markov
-term, the ramp R / scale, atanh of the output filter F."""
-SLOT_OF = {
-    White: 0,
-    BiasInstability: 1,
-    RateRandomWalk: 2,
-    Quantization: 3,
-    GaussMarkov: 4,
-    RateRamp: 5,
-    OutputFilter: 6,
-}
+SLOT_TERMS = (
+    White,
+    BiasInstability,
+    RateRandomWalk,
+    Quantization,
+    GaussMarkov,
+    RateRamp,
+    OutputFilter,
+)
+"""The noise terms a model may hold, one slot each, in slot order."""
+SLOT_PARAMETERS = tuple(term.parameters[0] for term in SLOT_TERMS)
+"""Each slot's parameter: the term's scale, its coordinate and prior (a Gauss-Markov term's
+correlation time is searched, not sampled)."""
+NOISE_SLOTS = tuple(parameter.name for parameter in SLOT_PARAMETERS)
+"""The sampled noise coordinates, by parameter (module docstring)."""
+BASELINE_TERMS = tuple(term.name for term in SLOT_TERMS)
+"""The noise terms a discovery baseline may hold (a low-pass shape of the output filter is
+decided by discovery itself, before its search)."""
+SLOT_OF = {term: index for index, term in enumerate(SLOT_TERMS)}
 """The slot of each noise term."""
+SLOT_COMPONENTS = Components.of(
+    [term.name for term in SLOT_TERMS if term is not GaussMarkov], Context(1.0)
+)
+"""The fixed-shape components of the slot terms (a Gauss-Markov term's shape, at its searched
+time constant, is an extra component of each summary: :func:`summary_components`)."""
+SCALE_SLOTS = np.array([parameter.link == "log" for parameter in SLOT_PARAMETERS], dtype=float)
+"""The slots of a term's scale, sampled in the log (lowered for a second MAP start)."""
 MAX_REGRESSORS = sum(term.max_columns for term in SEARCHED if issubclass(term, RegressionTerm))
 LEVEL_BLOCKS = 128
 """Block means for the coefficients of slow deterministic terms."""
@@ -174,20 +191,12 @@ def regressor_columns(spec: ModelSpec, data) -> tuple[np.ndarray, np.ndarray, li
 
 
 def slot_prior(spec: ModelSpec, scales: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Location and scale of the normal prior on each slot (log-normal noise scales centred
-    on the Allan curve's bounds, ``scales``), and the slots the model switches on."""
-    location = np.array(
-        [
-            math.log(scales["N"]),
-            math.log(scales["B"]),
-            math.log(scales["K"]),
-            math.log(scales["Q"]),
-            math.log(scales["G"]),
-            0.0,
-            0.0,
-        ]
-    )
-    scale = np.array([PRIOR_LOG_SD] * 5 + [1.0, 1.0])
+    """Location and scale of the normal prior on each slot (the term's own where it gives one,
+    else log-normal around the Allan curve's bound, ``scales``:
+    :func:`~bayescal.models._terms.reference_scales`), and the slots the model switches
+    on."""
+    priors = [p.prior or (math.log(scales[p.name]), PRIOR_LOG_SD) for p in SLOT_PARAMETERS]
+    location, scale = (np.array(column) for column in zip(*priors, strict=True))
     mask = np.zeros(len(NOISE_SLOTS))
     for effect in spec.effects:
         if isinstance(effect, SlotTerm):
@@ -223,21 +232,36 @@ def shaped(summary, gain: np.ndarray):
     ``gain`` at the bins' nodes (3, bins); the mean increment's basis is left as it is (unit
     gain at zero frequency)."""
     basis = np.array(summary.basis)
-    basis[:2] = basis[:2] * np.asarray(gain)[None]
+    basis[summary.shaped] = basis[summary.shaped] * np.asarray(gain)[None]
     return eqx.tree_at(lambda s: s.basis, summary, basis)
+
+
+def slot_values(theta, mask, ramp_scale) -> dict:
+    """The slots' values in their units at coordinates ``theta`` (each its term's
+    coordinate), zero where the mask switches a slot off."""
+    context = Context(1.0, linear_scale=ramp_scale)
+    on = mask.astype(theta.dtype) if hasattr(mask, "astype") else mask
+    return {
+        parameter.name: on[index] * parameter.natural(theta[..., index], context)
+        for index, parameter in enumerate(SLOT_PARAMETERS)
+    }
+
+
+def slot_reference_scales(allan) -> dict[str, float]:
+    """The level of each slot's parameter the classical Allan curve ``allan`` allows (the
+    centre of its weakly informative prior; the ramp's scale)."""
+    return {k: v for term in SLOT_TERMS for k, v in term.reference_scales(allan).items()}
 
 
 def slot_variances(theta, mask, ramp_scale, floor):
     """Weights of the summary's components (the noise terms', the Gauss-Markov term's, the
     rounding floor's) and the ramp, for coordinates ``theta``."""
-    on = mask.astype(theta.dtype)
-    value = lambda slot: on[slot] * jnp.exp(theta[..., slot])  # noqa: E731
-    filter_coefficient = on[6] * jnp.tanh(theta[..., 6])
-    weights = component_weights(value(0), value(1), value(2), value(3), filter_coefficient)
-    gauss_markov = value(4) ** 2
+    values = slot_values(theta, mask, ramp_scale)
+    weights = SLOT_COMPONENTS.weights(values)
+    gauss_markov = values["gm_sigma"] ** 2
     rounding = jnp.broadcast_to(floor, gauss_markov.shape)
     variances = jnp.concatenate((weights, gauss_markov[..., None], rounding[..., None]), axis=-1)
-    return variances, on[5] * theta[..., 5] * ramp_scale
+    return variances, values["R"]
 
 
 def profile(design: Design, theta):
@@ -315,13 +339,10 @@ class ModelFit(eqx.Module):
     @property
     def noise(self) -> dict:
         """Noise parameters at the MAP in the channel's units (absent terms: 0)."""
-        mask, theta = np.asarray(self.design.mask), self.theta
-        values = {
-            slot: float(mask[i] * math.exp(theta[i])) for i, slot in enumerate(NOISE_SLOTS[:5])
-        }
-        values["R"] = float(mask[5] * theta[5] * self.design.ramp_scale)
-        values["F"] = float(mask[6] * math.tanh(theta[6]))
-        return values
+        values = slot_values(
+            jnp.asarray(self.theta), np.asarray(self.design.mask), self.design.ramp_scale
+        )
+        return {name: float(value) for name, value in values.items()}
 
 
 def slow_columns(spec: "ModelSpec") -> np.ndarray:
@@ -417,33 +438,57 @@ def _block_basis(start, stop, rate_hz: float, gauss_markov_s: float) -> np.ndarr
     )
     return np.concatenate(
         (
-            block_covariance_basis(start, stop, rate_hz),
+            SLOT_COMPONENTS.block_covariances(start, stop, rate_hz),
             gauss_markov[None],
             White.block_covariance(start, stop, rate_hz)[None],
         )
     )
 
 
-def model_allan_variance(fit: ModelFit, tau, rate_hz: float):
-    noise = fit.noise
-    lowpass, coefficient = fit.lowpass, noise["F"]
-    if lowpass is not None and lowpass.shape == "one_tap":  # the noise model's own F
-        lowpass, coefficient = None, lowpass.coefficient
-    model = NoiseModel(
-        rate_hz,
-        N=noise["N"],
-        B=noise["B"],
-        K=noise["K"],
-        Q=noise["Q"],
-        R=noise["R"],
-        F=coefficient,
-        lowpass=lowpass,
-        lsb=fit.lsb,
-    )
-    variance = np.asarray(model.allan_variance(tau))
-    if noise["G"] > 0:
-        variance = variance + GaussMarkov(fit.spec.gauss_markov_s).allan_variance(tau, noise["G"])
+def fit_noise_model(fit: ModelFit) -> NoiseModel:
+    """The stationary noise of a fit at its MAP but a Gauss-Markov term (whose correlation
+    time the search holds: :func:`model_allan_variance`), as a :class:`NoiseModel`; the
+    output filter decided before the search in place of the one-tap slot when it has
+    another shape."""
+    values = {n: v for n, v in fit.noise.items() if v != 0 and n != GaussMarkov.parameter}
+    if fit.lowpass is not None:
+        values |= {k: v for k, v in fit.lowpass.values.items() if v != 0}
+    return NoiseModel(fit.design.summary.rate_hz, lsb=fit.lsb, **values)
+
+
+def _gauss_markov(fit: ModelFit) -> dict | None:
+    """The fit's Gauss-Markov term at its searched time constant, or None."""
+    sigma = fit.noise[GaussMarkov.parameter]
+    return {"gm_sigma": sigma, "gm_tau": fit.spec.gauss_markov_s} if sigma > 0 else None
+
+
+def model_allan_variance(fit: ModelFit, tau) -> np.ndarray:
+    """The Allan variance of a fit's noise at its MAP at ``tau`` (s)."""
+    variance = np.asarray(fit_noise_model(fit).allan_variance(tau))
+    term = _gauss_markov(fit)
+    if term is not None:
+        rate = fit.design.summary.rate_hz
+        variance = variance + np.asarray(GaussMarkov.allan_variance(tau, term, rate))
     return variance
+
+
+def model_allan_exponents(fit: ModelFit, tau) -> list[int]:
+    """The power-law exponent of the term of the fit's noise that dominates the Allan
+    variance at each ``tau`` (:meth:`NoiseModel.allan_exponents`, with the searched
+    Gauss-Markov term's)."""
+    model, term = fit_noise_model(fit), _gauss_markov(fit)
+    if term is None:
+        return model.allan_exponents(tau)
+    tau = np.asarray(tau, dtype=float)
+    pairs = [
+        pair
+        for piece in model.terms
+        for pair in piece.allan_exponents(tau, model.values, model.rate_hz)
+    ]
+    pairs += GaussMarkov.allan_exponents(tau, term, model.rate_hz)
+    exponents = np.array([alpha for alpha, _ in pairs])
+    values = np.stack([np.broadcast_to(np.asarray(v), tau.shape) for _, v in pairs])
+    return exponents[np.argmax(values, axis=0)].tolist()
 
 
 def bin_ratios(fit: ModelFit) -> tuple[np.ndarray, np.ndarray]:

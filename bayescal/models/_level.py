@@ -24,7 +24,6 @@ from jax.scipy.linalg import cho_solve
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from ..recording._series import blocks, gap_free_runs, is_spooled, series_size
-from ._components import block_covariance_basis
 
 GEOMETRIC_BLOCKS = 96
 EVEN_BLOCKS = 32
@@ -35,7 +34,8 @@ class LevelSummary(eqx.Module):
     block_time_s: np.ndarray
     """Mean time (s, sample centres) of each block, for the ramp."""
     basis: np.ndarray
-    """(terms, blocks, blocks): covariance of the block means per unit parameter^2."""
+    """(components, blocks, blocks): covariance of the block means per unit weight of each
+    component."""
 
 
 def _block_edges(values) -> list[tuple[int, int]]:
@@ -63,22 +63,23 @@ def _block_means(values, edges: np.ndarray) -> np.ndarray:
     return sums / (edges[:, 1] - edges[:, 0])
 
 
-def level_summary(values, rate_hz: float) -> LevelSummary:
+def level_summary(values, rate_hz: float, components) -> LevelSummary:
     """Block means of a rate series (NaN marks missing samples; an array or a spooled
-    series) and their covariance bases."""
+    series) and their covariance bases, one per component of ``components``
+    (:class:`~bayescal.models._components.Components`)."""
     values = values if is_spooled(values) else np.asarray(values, dtype=float)
     edges = np.array(_block_edges(values), dtype=np.int64)
     start, stop = edges[:, 0], edges[:, 1]
     return LevelSummary(
         block_mean=_block_means(values, edges),
         block_time_s=(start + stop) / 2.0 / rate_hz,
-        basis=block_covariance_basis(start, stop, rate_hz),
+        basis=components.block_covariances(start, stop, rate_hz),
     )
 
 
 def bias_given_noise(summary: LevelSummary, variances, ramp=0.0):
     """Mean and variance of the bias given the noise (the weights of the spectral components,
-    :func:`~bayescal.models._components.component_weights`) and the ramp R, under a flat prior.
+    :meth:`~bayescal.models._components.Components.weights`) and the ramp R, under a flat prior.
     Works on a batch of draws (leading axes of ``variances``)."""
     variances = jnp.asarray(variances)
     covariance = jnp.einsum("...t,tij->...ij", variances, summary.basis)

@@ -1,7 +1,9 @@
 """The stationary noise of one static IMU channel, as one model object.
 
 Terms (IEEE Std 952 / 1554, ../shared/DESIGN.md), for a rate signal in unit U sampled at fs,
-each one class in :mod:`bayescal.models.effects`:
+each one class in :mod:`bayescal.models.effects`, registered in
+:data:`bayescal.models._terms.NOISE_TERMS`: the model reads them from there, and ``bayescal
+terms`` lists them all. IEEE Std 952's are:
 
 ==================  =========  =============  ===========================================
 term                parameter  unit           two-sided PSD of the continuous rate S(f)
@@ -12,9 +14,10 @@ rate random walk    K          U*sqrt(Hz)     K^2 / (2 pi f)^2
 quantization        Q          U*s            white phase (angle) noise of variance Q^2
 rate ramp           R          U/s            deterministic R t
 output filter       F          1              the white noise leaves the sensor through
-                                              (1 + F z^-1) / (1 + F): unit gain at low
-                                              frequency (N stays the noise density the
-                                              Allan curve reads), less power near Nyquist
+                                              (1 + F z^-1) / (1 + F), F in (0, 1): unit
+                                              gain at low frequency (N stays the noise
+                                              density the Allan curve reads), less power
+                                              near Nyquist (or a low-pass shape instead)
 ==================  =========  =============  ===========================================
 
 Sampling: each sample is the average rate over its sample period (the integrated angle or
@@ -32,52 +35,28 @@ import numpy as np
 from jax.scipy.stats import norm
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
-from ._components import SPECTRAL_TERMS, component_weights
+from ._components import Components
 from ._level import bias_given_noise, level_summary
+from ._terms import NOISE_TERMS, PARAMETERS
 from ._whittle import spectral_summary, whittle_log_likelihood
-from .effects.bias_instability import BiasInstability
-from .effects.gauss_markov import GaussMarkov
-from .effects.output_filter import LOWPASS_UNITS, OutputFilter
-from .effects.quantization import Quantization
-from .effects.rate_ramp import RateRamp
-from .effects.rate_random_walk import RateRandomWalk
+from .effects._parameter import Context
 from .effects.white import White
 
-_TERM_OF_PARAMETER = {term.parameter: term for term in (*SPECTRAL_TERMS, RateRamp, GaussMarkov)}
 
-
-def parameter_unit(parameter: str, channel_unit: str) -> str:
-    """Unit of a noise parameter (Q, N, B, K, R, F, sigma_gm, or the bias) for a channel in
-    ``channel_unit`` (IEEE Std 952; ASCII, e.g. ``deg/s/sqrt(Hz)``).
-
-    Raises
-    ------
-    ValueError
-        An unknown parameter.
-    """
-    if parameter == "bias":
-        return channel_unit
-    if parameter in LOWPASS_UNITS:
-        return LOWPASS_UNITS[parameter]
-    if parameter not in _TERM_OF_PARAMETER:
-        raise ValueError(
-            f"unknown noise parameter {parameter!r}; expected bias or one of "
-            f"{', '.join((*_TERM_OF_PARAMETER, *LOWPASS_UNITS))}"
-        )
-    return _TERM_OF_PARAMETER[parameter].unit(channel_unit)
-
-
-def _present(parameter) -> bool:
+def _present(value) -> bool:
     """False only for a term switched off by a literal zero (traced values always count)."""
-    return not (isinstance(parameter, (int, float)) and parameter == 0)
+    return not (isinstance(value, (int, float)) and value == 0)
 
 
 class NoiseModel(eqx.Module):
     """Bias plus the noise terms of a static channel; one object whose simulator, Allan
     variance, spectrum and likelihood share its parameters (in the channel's unit U).
 
-    A parameter of zero leaves its term out. Parameters may be JAX arrays (a batch of draws
-    broadcasts through :meth:`allan_variance` and :meth:`psd`).
+    The parameters are those of the registered terms, by name (module docstring; ``N``,
+    ``B``, ``K``, ``Q``, ``R``, ``F``, a low-pass shape's ``filter_...``; ``bayescal terms``
+    lists them all); a term whose scale (its first parameter) is zero or absent is left
+    out. Parameters may be JAX arrays (a batch of draws broadcasts through
+    :meth:`allan_variance` and :meth:`psd`).
 
     Parameters
     ----------
@@ -85,25 +64,17 @@ class NoiseModel(eqx.Module):
         Sample rate, Hz.
     bias : float
         Turn-on bias: the expected reading at the first sample, U.
-    N : float
-        White noise density (angle / velocity random walk), U/√Hz.
-    B : float
-        Bias instability (flicker), U.
-    K : float
-        Rate random walk, U·√Hz.
-    Q : float
-        Quantization (white angle noise), U·s.
-    R : float
-        Rate ramp, U/s.
-    F : float
-        One-tap output filter coefficient in (-1, 1), dimensionless.
-    lowpass : OutputFilter, optional
-        The sensor's low-pass output filter (shape "decimation", "butterworth" or "biquad"),
-        unit gain at zero frequency: it shapes the white noise, so N stays the low-frequency
-        density.
     lsb : float
         The output's resolution, U: the samples are rounded to multiples of it (zero: not
         rounded).
+    **parameters : float
+        The noise parameters by name, each in its unit
+        (:func:`~bayescal.models._terms.parameter_unit`): N (U/√Hz),
+        B (U), K (U·√Hz), Q (U·s), R (U/s), F (one-tap output filter coefficient in (0, 1)),
+        the other registered terms', or one low-pass shape's parameters (``filter_length``
+        and ``filter_stages``; ``filter_cutoff``, ``filter_order`` and ``filter_warping``;
+        ``filter_pole_k1`` ... ``filter_zero_k2``): it shapes the white noise with unit gain
+        at zero frequency, so N stays the low-frequency density.
 
     Examples
     --------
@@ -118,28 +89,67 @@ class NoiseModel(eqx.Module):
     """
 
     rate_hz: float = eqx.field(static=True)
-    bias: float | jax.Array = 0.0
-    N: float | jax.Array = 0.0
-    B: float | jax.Array = 0.0
-    K: float | jax.Array = 0.0
-    Q: float | jax.Array = 0.0
-    R: float | jax.Array = 0.0
-    F: float | jax.Array = 0.0
-    lowpass: OutputFilter | None = None
-    lsb: float | jax.Array = 0.0
+    bias: float | jax.Array
+    values: dict
+    """The noise parameters by name (only those given)."""
+    lsb: float | jax.Array
+
+    def __init__(self, rate_hz: float, bias=0.0, *, lsb=0.0, **parameters):
+        unknown = [name for name in parameters if name not in PARAMETERS]
+        if unknown:
+            raise ValueError(
+                f"NoiseModel: unknown parameter {unknown[0]!r}; the parameters are "
+                f"{', '.join(PARAMETERS)}"
+            )
+        self.rate_hz, self.bias, self.lsb = rate_hz, bias, lsb
+        self.values = dict(parameters)
 
     def __check_init__(self):
         if not self.rate_hz > 0:
             raise ValueError(f"rate_hz={self.rate_hz!r} must be a positive sample rate")
-        if isinstance(self.F, (int, float)) and not -1 < self.F < 1:
-            raise ValueError(f"F={self.F!r}: the output filter coefficient lies in (-1, 1)")
-        if self.lowpass is not None and (self.lowpass.shape == "one_tap" or _present(self.F)):
-            raise ValueError(
-                "lowpass: a decimation, Butterworth or biquad OutputFilter, and F = 0 beside it "
-                "(one output filter shape at a time)"
-            )
         if isinstance(self.lsb, (int, float)) and not self.lsb >= 0:
             raise ValueError(f"lsb={self.lsb!r}: the output's resolution is zero or positive")
+        context = Context(self.rate_hz)
+        for name, value in self.values.items():
+            parameter = PARAMETERS[name]
+            if isinstance(value, (int, float)) and value != 0 and parameter.span != "record":
+                low, high = parameter.bounds(context)
+                if not low < value < high:
+                    raise ValueError(f"{name}={value!r}: it lies in ({low:g}, {high:g})")
+        for term in self.terms:
+            missing = [p.name for p in term.parameters if p.name not in self.values]
+            if missing:
+                raise ValueError(f"{term.name} needs {', '.join(missing)} too")
+        shapes = [term.name for term in self.terms if term.filter_shape is not None]
+        if len(shapes) > 1:
+            raise ValueError(f"one output filter shape at a time ({', '.join(shapes)} given)")
+
+    def __getattr__(self, name):
+        # The parameters read as attributes (model.N), zero for a term left out.
+        if name in PARAMETERS:
+            return self.values.get(name, 0.0)
+        raise AttributeError(f"'NoiseModel' object has no attribute {name!r}")
+
+    @property
+    def terms(self) -> tuple:
+        """The terms the model holds (those whose scale is given and not zero), in the
+        registry's order."""
+        return tuple(
+            term
+            for term in NOISE_TERMS
+            if term.parameters and _present(self.values.get(term.parameters[0].name, 0.0))
+        )
+
+    @property
+    def _active(self) -> dict:
+        """The parameters of the terms the model holds."""
+        return {p.name: self.values[p.name] for term in self.terms for p in term.parameters}
+
+    @property
+    def lowpass(self):
+        """The low-pass shape of the output filter (its term), or None."""
+        shapes = [t for t in self.terms if t.filter_shape not in (None, "one_tap")]
+        return shapes[0] if shapes else None
 
     @property
     def rounding_variance(self) -> float:
@@ -148,49 +158,39 @@ class NoiseModel(eqx.Module):
         exp(-2 pi^2 sd^2 / LSB^2) of the noise's sd; within 2e-4 for an LSB of 1.5 sd)."""
         return self.lsb**2 / 12.0
 
-    def increment_weights(self):
-        """Weights of the spectral components of the increments
-        (:func:`~bayescal.models._components.component_weights`), the rounding's floor on the
-        white one.
-
-        Returns
-        -------
-        jax.Array
-            One weight per spectral component of the increments, U^2 (the component's
-            variance per sample).
-        """
-        weights = component_weights(self.N, self.B, self.K, self.Q, self.F)
-        return weights.at[..., 0].add(self.rounding_variance / self.rate_hz)
-
-    def whittle_weights(self, nu):
+    def whittle_weights(self, summary):
         """(variances, filtered) for :func:`~bayescal.models._whittle.whittle_log_likelihood`
-        at nodes ``nu`` (cycles per sample): without a low-pass, :meth:`increment_weights` and
-        None; with one, the weights the filter does not shape and (|H|^2 at ``nu``, the
-        weights of the white noise's two components it shapes).
+        of ``summary``, aligned with its components: without a low-pass, every component's
+        weight (the rounding's floor on the white one) and None; with one, the weights the
+        filter does not shape and (|H|^2 at the summary's nodes, the weights it shapes).
 
         Parameters
         ----------
-        nu : array_like
-            Frequencies, cycles per sample (0 < nu <= 1/2).
+        summary : SpectralSummary
+            A record's spectral summary (:func:`~bayescal.models._whittle.spectral_summary`)
+            whose components hold the model's terms.
 
         Returns
         -------
         variances : jax.Array
             The weights the low-pass does not shape, U^2.
         filtered : tuple of jax.Array or None
-            None without a low-pass; else (|H|^2 at ``nu``, the white noise's two weights).
+            None without a low-pass; else (|H|^2 at the nodes, the shaped weights).
         """
-        weights = self.increment_weights()
+        components = summary.components
+        weights = components.weights(self._active)
+        floor = self.rounding_variance / self.rate_hz
         if self.lowpass is None:
-            return weights, None
-        white = component_weights(self.N, F=self.F)[..., :2]
-        rest = weights.at[..., 0].set(self.rounding_variance / self.rate_hz).at[..., 1].set(0.0)
-        return rest, (self.lowpass.gain(nu, self.rate_hz), white)
+            return weights.at[..., components.white].add(floor), None
+        shaped = summary.shaped
+        gain = self.lowpass.gain(summary.node_frequency, self._active, self.rate_hz)
+        rest = weights.at[..., shaped].set(0.0).at[..., components.white].set(floor)
+        return rest, (gain, weights[..., shaped])
 
     def increment_autocovariance(self, lags) -> np.ndarray:
         """Autocovariance of the increments y_{k+1} - y_k at integer ``lags``, U^2: each
-        component's closed form, and the low-pass's change to the white noise's by numerical
-        integration of its spectrum (8192 midpoints on (0, 1/2)).
+        term's closed form, the low-pass's change to the white noise's by numerical
+        integration of its spectrum (8192 midpoints on (0, 1/2)), and the rounding's.
 
         Parameters
         ----------
@@ -203,18 +203,21 @@ class NoiseModel(eqx.Module):
             The autocovariance at each lag, U^2.
         """
         lags = np.asarray(lags, dtype=float)
-        weights = np.asarray(self.increment_weights())
+        values = self._active
         covariance = sum(
-            weight * term.autocovariance(lags, self.rate_hz)
-            for weight, term in zip(weights, SPECTRAL_TERMS, strict=True)
+            np.asarray(term.increment_autocovariance(lags, values, self.rate_hz))
+            for term in self.terms
         )
-        nu = (np.arange(8192) + 0.5) / 16384
-        _, shaping = self.whittle_weights(nu)
-        if shaping is not None:
-            gain, white = (np.asarray(part) for part in shaping)
+        covariance = covariance + self.rounding_variance / self.rate_hz * White.autocovariance(
+            lags, self.rate_hz
+        )
+        if self.lowpass is not None:
+            nu = (np.arange(8192) + 0.5) / 16384
+            gain = np.asarray(self.lowpass.gain(nu, values, self.rate_hz))
             spectrum = sum(
-                w * np.asarray(t.spectrum(nu, self.rate_hz))
-                for w, t in zip(white, SPECTRAL_TERMS[:2], strict=True)
+                np.asarray(term.increment_spectrum(nu, values, self.rate_hz))
+                for term in self.terms
+                if term.filtered
             )
             cosine = np.cos(2 * np.pi * np.outer(lags, nu))
             covariance = covariance + 2 * cosine @ (spectrum * (gain - 1.0)) / 16384
@@ -244,20 +247,40 @@ class NoiseModel(eqx.Module):
         array([0.01   , 0.00577])
         """
         tau = jnp.asarray(tau, dtype=float)
-        white = (
-            White.allan_variance(tau, self.N)
-            if self.lowpass is None
-            else self.lowpass.shaped_allan_variance(tau, self.N, self.rate_hz)
-        )
-        return (
-            Quantization.allan_variance(tau, self.Q)
-            + white
-            + self.rounding_variance / (tau * self.rate_hz)
-            + OutputFilter.allan_variance(tau, self.N, self.F, self.rate_hz)
-            + BiasInstability.allan_variance(tau, self.B)
-            + RateRandomWalk.allan_variance(tau, self.K)
-            + RateRamp.allan_variance(tau, self.R)
-        )
+        values, lowpass = self._active, self.lowpass
+        total = self.rounding_variance / (tau * self.rate_hz)
+        for term in self.terms:
+            if term is White and lowpass is not None:
+                total = total + lowpass.shaped_allan_variance(tau, values, self.rate_hz)
+            else:
+                total = total + term.allan_variance(tau, values, self.rate_hz)
+        return total
+
+    def allan_exponents(self, tau) -> list:
+        """The power-law exponent alpha of S_y(f) of the term with the largest Allan variance
+        at each ``tau`` (for the equivalent degrees of freedom of a check).
+
+        Parameters
+        ----------
+        tau : array_like
+            Averaging times, s.
+
+        Returns
+        -------
+        list of int
+            alpha at each tau (0: white, -1: flicker, -2: random walk, 2: white angle noise).
+        """
+        tau = np.asarray(tau, dtype=float)
+        pairs = [
+            pair
+            for term in self.terms
+            for pair in term.allan_exponents(tau, self._active, self.rate_hz)
+        ]
+        if not pairs:
+            return [0] * tau.size
+        exponents = np.array([alpha for alpha, _ in pairs])
+        values = np.stack([np.broadcast_to(np.asarray(v), tau.shape) for _, v in pairs])
+        return exponents[np.argmax(values, axis=0)].tolist()
 
     def psd(self, f):
         """Two-sided power spectral density of the samples at ``f`` (Hz, 0 < f <= fs/2),
@@ -283,13 +306,13 @@ class NoiseModel(eqx.Module):
         0.0001
         """
         nu = jnp.asarray(f, dtype=float) / self.rate_hz
-        weights = component_weights(self.N, self.B, self.K, self.Q, self.F)
-        shapes = jnp.stack([term.spectrum(nu, self.rate_hz) for term in SPECTRAL_TERMS], -1)
-        parts = weights * shapes
-        if self.lowpass is not None:  # the white noise's two components through the filter
-            gain = self.lowpass.gain(nu, self.rate_hz)[..., None]
-            parts = parts.at[..., :2].multiply(gain)
-        increments = jnp.sum(parts, axis=-1)
+        values, lowpass = self._active, self.lowpass
+        increments = 0.0 * nu
+        for term in self.terms:
+            part = term.increment_spectrum(nu, values, self.rate_hz)
+            if term.filtered and lowpass is not None:
+                part = part * lowpass.gain(nu, values, self.rate_hz)
+            increments = increments + part
         return increments / (4 * jnp.sin(jnp.pi * nu) ** 2 * self.rate_hz) + (
             self.rounding_variance / self.rate_hz
         )
@@ -310,22 +333,20 @@ class NoiseModel(eqx.Module):
         jax.Array
             The samples, U, each the average rate over its period, starting at t = 0.
         """
-        # The order of the draws is fixed: the same key gives the same record in every
-        # release.
-        white_key, walk_key, bridge_key, flicker_key, quant_key = jax.random.split(key, 5)
-        if self.lowpass is None:
-            y = self.bias + White.sample(white_key, n, self.rate_hz, self.N, self.F)
-        else:
-            white = White.sample(white_key, 2 * n, self.rate_hz, self.N)
-            y = self.bias + self.lowpass.apply(white, self.rate_hz)[:n]
-        if _present(self.K):
-            y = y + RateRandomWalk.sample(walk_key, bridge_key, n, self.rate_hz, self.K)
-        if _present(self.B):
-            y = y + self.B * BiasInstability.sample(flicker_key, n)
-        if _present(self.Q):
-            y = y + Quantization.sample(quant_key, n, self.rate_hz, self.Q)
-        if _present(self.R):
-            y = y + RateRamp.sample(n, self.rate_hz, self.R)
+        # Each term draws on its own streams of one split (NoiseTerm.streams): the same key
+        # gives the same record in every release.
+        count = 1 + max(stream for term in NOISE_TERMS for stream in term.streams)
+        keys = jax.random.split(key, count)
+        values, lowpass = self._active, self.lowpass
+        y = self.bias + jnp.zeros(n)
+        for term in self.terms:
+            if term.filtered and lowpass is not None:
+                part = lowpass.apply(
+                    term.sample(keys, 2 * n, self.rate_hz, values), values, self.rate_hz
+                )[:n]
+            else:
+                part = term.sample(keys, n, self.rate_hz, values)
+            y = y + part
         if _present(self.lsb):
             y = self.lsb * jnp.round(y / self.lsb)
         return y
@@ -352,9 +373,9 @@ class NoiseModel(eqx.Module):
         """Log-likelihood of a record ``y`` (U; NaN marks missing samples): the debiased,
         binned Whittle likelihood of its increments (the likelihood every noise fit of
         bayescal uses, :mod:`bayescal.models._whittle`; the low-pass and the rounding as in
-        :meth:`psd`), plus the exact Gaussian log density
-        of its level — the generalised-least-squares estimate of the turn-on bias from block
-        means given the noise (:mod:`bayescal.models._level`) — at :attr:`bias`.
+        :meth:`psd`), plus the exact Gaussian log density of its level — the
+        generalised-least-squares estimate of the turn-on bias from block means given the
+        noise (:mod:`bayescal.models._level`) — at :attr:`bias`.
 
         Parameters
         ----------
@@ -376,10 +397,19 @@ class NoiseModel(eqx.Module):
         True
         """
         values = np.asarray(y, dtype=float)
-        summary = spectral_summary(values, self.rate_hz)
-        variances, filtered = self.whittle_weights(summary.node_frequency)
-        increments = whittle_log_likelihood(summary, variances, self.R, filtered=filtered)
-        weights = self.increment_weights()
-        mean, variance = bias_given_noise(level_summary(values, self.rate_hz), weights, self.R)
-        level = norm.logpdf(mean, loc=self.bias, scale=jnp.sqrt(variance))
-        return float(jnp.sum(increments) + level)
+        names = [term.name for term in self.terms]
+        components = Components.of(names, Context(self.rate_hz, values.size / self.rate_hz))
+        summary = spectral_summary(values, self.rate_hz, components=components)
+        variances, filtered = self.whittle_weights(summary)
+        ramp = self._active.get("R", 0.0)
+        increments = whittle_log_likelihood(summary, variances, ramp, filtered=filtered)
+        level = level_summary(values, self.rate_hz, components)
+        weights = (
+            components.weights(self._active)
+            .at[..., components.white]
+            .add(self.rounding_variance / self.rate_hz)
+        )
+        mean, variance = bias_given_noise(level, weights, ramp)
+        return float(
+            jnp.sum(increments) + norm.logpdf(mean, loc=self.bias, scale=jnp.sqrt(variance))
+        )

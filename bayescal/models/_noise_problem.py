@@ -2,23 +2,25 @@
 the increments (:mod:`._whittle`) and a prior on each sampled coordinate; the bias, linear and
 Gaussian given the noise, comes from the block means (:mod:`._level`).
 
-Parameters are sampled unconstrained: the logarithm of each noise scale, R divided by its prior
-scale, the logit of the one-tap output filter's coefficient F (a low-pass: F in (0, 1); a
-negative F would shape the white noise exactly as white angle noise does, which Q models), and
-the low-pass filters' coordinates (:mod:`.effects.output_filter`).
+Parameters are sampled unconstrained, each in its term's coordinate
+(:class:`~bayescal.models.effects._parameter.Parameter`): the logarithm of a noise scale, the
+ramp over its prior scale, the logit of the one-tap output filter's coefficient F in (0, 1),
+the low-pass shapes' coordinates, a Gauss-Markov correlation time's logit within the record's
+decades. Which terms a problem holds is its prior's parameters; its summaries hold the
+components of a family of terms (every candidate of a term search), a term the problem lacks
+weighing zero.
 """
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
-from ._components import component_weights
-from ._level import LevelSummary
-from ._terms import LOWPASS_PARAMETERS
-from ._whittle import SpectralSummary, whittle_log_likelihood
-from .effects.output_filter import lowpass_gain, lowpass_natural
+from ._components import Components
+from ._level import LevelSummary, level_summary
+from ._terms import PARAMETERS, TERM_OF_PARAMETER, TERMS
+from ._whittle import SpectralSummary, spectral_summary, whittle_log_likelihood
+from .effects._parameter import Context
 
 PRIOR_LOG_SD = 4.0
 """Standard deviation of the log-normal priors on the noise scales, in the log (a factor
@@ -26,13 +28,13 @@ PRIOR_LOG_SD = 4.0
 
 
 class NoisePrior(eqx.Module):
-    """Independent normal priors on the sampled coordinates: log P for a noise scale P, and
-    R / ramp_scale for the ramp (whose prior is then N(0, 1))."""
+    """Independent normal priors on the sampled coordinates of ``parameters``."""
 
     location: np.ndarray
     scale: np.ndarray
-    ramp_scale: np.ndarray
-    """Scale of the ramp's sampled coordinate (an array, so that jit traces it)."""
+    linear_scale: np.ndarray
+    """The natural scale of a linear coordinate (the ramp's: R / linear_scale is sampled, its
+    prior N(0, 1)); an array, so that jit traces it."""
     parameters: tuple[str, ...] = eqx.field(static=True)
     description: str = eqx.field(static=True)
 
@@ -42,17 +44,35 @@ class NoisePrior(eqx.Module):
         if not np.all(np.asarray(self.scale) > 0):
             raise ValueError("prior: every scale must be positive")
 
+    @property
+    def terms(self) -> tuple[str, ...]:
+        """The terms whose parameters it holds, in its order."""
+        return tuple(dict.fromkeys(TERM_OF_PARAMETER[name] for name in self.parameters))
+
+
+def record_components(terms, rate_hz: float, n_samples: int) -> Components:
+    """The components of ``terms`` for a record of ``n_samples`` at ``rate_hz``."""
+    return Components.of(terms, Context(rate_hz, n_samples / rate_hz))
+
+
+def noise_summaries(values, rate_hz: float, terms, level_values=None):
+    """(spectral, level) summaries of a record (NaN marks a gap) holding the components of
+    ``terms``: what every :class:`NoiseProblem` of those terms shares. ``level_values``: the
+    samples whose level the bias is (``values`` by default)."""
+    components = record_components(terms, rate_hz, len(values))
+    spectral = spectral_summary(values, rate_hz, components=components)
+    level = level_summary(values if level_values is None else level_values, rate_hz, components)
+    return spectral, level
+
 
 class NoiseProblem(eqx.Module):
     """The log-posterior of the noise parameters of one record.
 
-    Its parameters are the prior's: noise scales (N, B, K, Q), the ramp R, the one-tap output
-    filter F, or a low-pass output filter's (``filter_length`` and ``filter_stages``, or
-    ``filter_cutoff``, ``filter_order`` and ``filter_warping``;
-    :mod:`.effects.output_filter`). ``lsb`` is the resolution the samples are rounded to
+    Its parameters are the prior's; its summaries' components those of a family of terms that
+    holds them (:func:`noise_summaries`). ``lsb`` is the resolution the samples are rounded to
     (zero: not rounded), whose known white floor LSB^2 / (12 fs) comes after the filter;
-    ``mask`` (when given) switches parameters off for model selection: a masked noise scale
-    is zero, a masked filter passes everything.
+    ``mask`` (when given) switches parameters off for model selection: a masked term's first
+    parameter — its scale — is zero, a masked filter shape passes everything.
     """
 
     spectral: SpectralSummary
@@ -60,6 +80,10 @@ class NoiseProblem(eqx.Module):
     prior: NoisePrior
     lsb: np.ndarray = eqx.field(default_factory=lambda: np.asarray(0.0))
     mask: np.ndarray | None = None
+
+    @property
+    def components(self) -> Components:
+        return self.spectral.components
 
     @property
     def rounding(self):
@@ -71,71 +95,86 @@ class NoiseProblem(eqx.Module):
         return self.prior.parameters
 
     @property
-    def shape(self) -> str | None:
-        """The low-pass output filter's shape, if the model has one."""
-        for shape, names in LOWPASS_PARAMETERS.items():
-            if names[0] in self.parameters:
-                return shape
+    def terms(self) -> tuple[str, ...]:
+        return self.prior.terms
+
+    @property
+    def context(self) -> Context:
+        """What the parameters' ranges depend on (the record's rate and length, the ramp's
+        scale)."""
+        spectral = self.spectral
+        return Context(spectral.rate_hz, spectral.duration_s, self.prior.linear_scale)
+
+    @property
+    def filter_term(self):
+        """The output filter's low-pass shape term, if the model has one (the one-tap filter,
+        exact in the components, is not one)."""
+        for name in self.terms:
+            shape = TERMS[name].filter_shape
+            if shape is not None and shape != "one_tap":
+                return TERMS[name]
         return None
 
-    def _lowpass(self, theta) -> tuple:
-        """The low-pass filter's coordinates in ``theta``."""
-        return tuple(
-            theta[..., self.parameters.index(name)] for name in LOWPASS_PARAMETERS[self.shape]
-        )
+    @property
+    def shape(self) -> str | None:
+        """The low-pass output filter's shape, if the model has one."""
+        term = self.filter_term
+        return None if term is None else term.filter_shape
 
-    def natural(self, theta):
+    def natural(self, theta) -> dict:
         """Sampled coordinates -> parameter values in their units (channel units for the
-        noise, samples, Hz or 1 for a low-pass filter's)."""
-        transform = {"R": lambda x: x * self.prior.ramp_scale, "F": jax.nn.sigmoid}
-        values = {}
-        shape = self.shape
-        for index, name in enumerate(self.parameters):
-            if name.startswith("filter_"):
-                continue
-            values[name] = transform.get(name, jnp.exp)(theta[..., index])
-        if shape is not None:
-            values |= lowpass_natural(shape, self._lowpass(theta), self.spectral.rate_hz)
-        return values
+        noise, samples, Hz, s or 1 for the others)."""
+        context = self.context
+        return {
+            name: PARAMETERS[name].natural(theta[..., index], context)
+            for index, name in enumerate(self.parameters)
+        }
 
     def _switched(self, theta) -> dict:
-        """The noise values with masked ones set to zero."""
+        """The values with each masked term's scale (its first parameter) set to zero; a
+        filter shape's are left to :meth:`whittle_weights`."""
         values = self.natural(theta)
         if self.mask is None:
             return values
-        for index, name in enumerate(self.parameters):
-            if name in values and not name.startswith("filter_"):
-                values[name] = values[name] * self.mask[index]
+        for name in self.terms:
+            term = TERMS[name]
+            if term.filter_shape in (None, "one_tap"):
+                first = term.parameters[0].name
+                values[first] = values[first] * self.mask[self.parameters.index(first)]
         return values
 
-    def variances(self, theta):
-        """Weights of the spectral components (:func:`component_weights`), the rounding floor
-        on the white noise."""
+    def _weights(self, theta) -> tuple:
+        """(the components' weights at ``theta``, the values they come from)."""
         values = self._switched(theta)
-        weights = component_weights(
-            **{name: values[name] for name in ("N", "B", "K", "Q", "F") if name in values}
-        )
-        return weights.at[..., 0].add(self.rounding)
+        return self.components.weights(values), values
+
+    def variances(self, theta):
+        """Weights of the summaries' components (:meth:`Components.weights`), the rounding
+        floor on the white noise's."""
+        return self._weights(theta)[0].at[..., self.components.white].add(self.rounding)
 
     def whittle_weights(self, theta):
         """(variances, filtered) for the Whittle likelihood: all weights and None without a
         low-pass; with one, the weights it does not shape and (its gain at the bins' nodes,
-        the white components it shapes) (:func:`~bayescal.models._whittle.node_spectrum`)."""
-        weights = self.variances(theta)
-        shape = self.shape
-        if shape is None:
-            return weights, None
-        gain = lowpass_gain(shape, self.spectral.node_frequency, self._lowpass(theta))
+        the weights of the components it shapes)
+        (:func:`~bayescal.models._whittle.node_spectrum`)."""
+        weights, values = self._weights(theta)
+        white = self.components.white
+        term = self.filter_term
+        if term is None:
+            return weights.at[..., white].add(self.rounding), None
+        gain = term.gain(self.spectral.node_frequency, values, self.spectral.rate_hz)
         if self.mask is not None:
-            on = self.mask[self.parameters.index(LOWPASS_PARAMETERS[shape][0])]
+            on = self.mask[self.parameters.index(term.parameters[0].name)]
             gain = 1.0 + on * (gain - 1.0)
-        values = self._switched(theta)
-        white = component_weights(N=values["N"], F=values.get("F", 0.0))[..., :2]
-        rest = weights.at[..., 0].set(self.rounding).at[..., 1].set(0.0)
-        return rest, (gain, white)
+        shaped = self.spectral.shaped
+        rest = weights.at[..., shaped].set(0.0).at[..., white].set(self.rounding)
+        return rest, (gain, weights[..., shaped])
 
     def ramp(self, theta):
-        return self._switched(theta).get("R", jnp.zeros(theta.shape[:-1]))
+        values = self._switched(theta)
+        rates = [TERMS[name].mean_rate for name in self.terms if TERMS[name].mean_rate]
+        return values[rates[0]] if rates else jnp.zeros(theta.shape[:-1])
 
     def pointwise_log_likelihood(self, theta):
         variances, filtered = self.whittle_weights(theta)

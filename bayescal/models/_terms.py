@@ -1,6 +1,10 @@
-"""The noise terms a user names (``--terms``, ``terms=``): canonical names, aliases, the
-default and the full set. No JAX here: the command line checks a user's terms before it loads
-anything heavy.
+"""The registry of noise terms: every term of the stationary noise model, one class in one
+file of :mod:`.effects`, registered once in :data:`NOISE_TERMS`. Everything else that speaks
+of terms reads it: the names and aliases a user may give (``--terms``, ``terms=``), each
+parameter's unit, display units, coordinate and prior, the classical readings, the sensor
+cards' entries, the candidates of the term search, the model and its likelihood.
+
+Adding a term is its file and one line in :data:`NOISE_TERMS`.
 
 The default, ``auto``, lets the record choose its terms by evidence
 (:func:`bayescal.inference.select_noise_terms`): white noise always, and each of
@@ -10,100 +14,74 @@ The default, ``auto``, lets the record choose its terms by evidence
 from typing import Literal
 
 from .._errors import InputError
+from ..recording._units import convert, parse_unit
+from .effects._base import NoiseTerm
+from .effects._parameter import Parameter
+from .effects.bias_instability import BiasInstability
+from .effects.biquad_filter import BiquadFilter
+from .effects.butterworth_filter import ButterworthFilter
+from .effects.decimation_filter import DecimationFilter
+from .effects.output_filter import OutputFilter
+from .effects.quantization import Quantization
+from .effects.rate_ramp import RateRamp
+from .effects.rate_random_walk import RateRandomWalk
+from .effects.white import White
 
-LOWPASS_PARAMETERS = {
-    "decimation": ("filter_length", "filter_stages"),
-    "butterworth": ("filter_cutoff", "filter_order", "filter_warping"),
-    "biquad": ("filter_pole_k1", "filter_pole_k2", "filter_zero_k1", "filter_zero_k2"),
-}
-"""The low-pass output filter's shapes and their parameters (:mod:`.effects.output_filter`)."""
-FILTER_SHAPE_OF_TERM = {
-    "output_filter": "one_tap",
-    "decimation_filter": "decimation",
-    "butterworth_filter": "butterworth",
-    "biquad_filter": "biquad",
-}
-"""The output filter's terms, one per shape: a model holds at most one of them."""
-PARAMETERS_OF_TERM = {
-    "quantization": ("Q",),
-    "white": ("N",),
-    "output_filter": ("F",),
-    "decimation_filter": LOWPASS_PARAMETERS["decimation"],
-    "butterworth_filter": LOWPASS_PARAMETERS["butterworth"],
-    "biquad_filter": LOWPASS_PARAMETERS["biquad"],
-    "bias_instability": ("B",),
-    "rate_random_walk": ("K",),
-    "rate_ramp": ("R",),
-}
+NOISE_TERMS: tuple[type[NoiseTerm], ...] = (
+    Quantization,
+    White,
+    OutputFilter,
+    DecimationFilter,
+    ButterworthFilter,
+    BiquadFilter,
+    BiasInstability,
+    RateRandomWalk,
+    RateRamp,
+)
+"""Every noise term, in the canonical order (by the slope of its Allan deviation, as IEEE Std
+952's table: -1, -1/2 and the output filter's shapes, 0, +1/2, +1)."""
+
+TERMS = {term.name: term for term in NOISE_TERMS}
+"""Every noise term by its name."""
+ALL_TERMS = tuple(TERMS)
+"""Every noise term's name, in the canonical order."""
+TERM_ALIASES = {alias: term.name for term in NOISE_TERMS for alias in (term.name, *term.aliases)}
+"""Every name a user may give a term (lower case) -> the term's name."""
+PARAMETERS = {p.name: p for term in NOISE_TERMS for p in term.parameters}
+"""Every noise parameter by its name."""
+PARAMETERS_OF_TERM = {term.name: tuple(p.name for p in term.parameters) for term in NOISE_TERMS}
 TERM_OF_PARAMETER = {
     parameter: term for term, parameters in PARAMETERS_OF_TERM.items() for parameter in parameters
 }
-TERM_ALIASES = {
-    "white": "white",
-    "n": "white",
-    "arw": "white",
-    "vrw": "white",
-    "bias_instability": "bias_instability",
-    "flicker": "bias_instability",
-    "b": "bias_instability",
-    "rate_random_walk": "rate_random_walk",
-    "rrw": "rate_random_walk",
-    "k": "rate_random_walk",
-    "quantization": "quantization",
-    "q": "quantization",
-    "white_angle": "quantization",
-    "rate_ramp": "rate_ramp",
-    "ramp": "rate_ramp",
-    "r": "rate_ramp",
-    "output_filter": "output_filter",
-    "one_tap": "output_filter",
-    "filter": "output_filter",
-    "f": "output_filter",
-    "decimation_filter": "decimation_filter",
-    "decimation": "decimation_filter",
-    "cic": "decimation_filter",
-    "butterworth_filter": "butterworth_filter",
-    "butterworth": "butterworth_filter",
-    "lowpass": "butterworth_filter",
-    "biquad_filter": "biquad_filter",
-    "biquad": "biquad_filter",
-    "second_order_section": "biquad_filter",
-    "sos": "biquad_filter",
+FILTER_SHAPE_OF_TERM = {
+    term.name: term.filter_shape for term in NOISE_TERMS if term.filter_shape is not None
 }
+"""The output filter's terms, one per shape: a model holds at most one of them."""
+CANDIDATE_TERMS = tuple(term.name for term in NOISE_TERMS if term.candidate)
+"""The terms ``auto`` tries beside white noise (at most one output filter shape)."""
+READINGS = {
+    term.parameters[0].name: term.reading for term in NOISE_TERMS if term.reading is not None
+}
+"""Each term's classical reading off the Allan deviation, by parameter (IEEE Std 952 Annex C:
+Q, N, B, K)."""
 AUTO = "auto"
 """Choose the terms by evidence (the default)."""
 DEFAULT_TERMS = AUTO
 CLASSICAL_TERMS = ("white", "bias_instability", "rate_random_walk")
-"""The three terms most datasheets quote (the default before ``auto``)."""
-ALL_TERMS = (
-    "quantization",
-    "white",
-    "output_filter",
-    "decimation_filter",
-    "butterworth_filter",
-    "biquad_filter",
-    "bias_instability",
-    "rate_random_walk",
-    "rate_ramp",
-)
-"""Every noise term, in the canonical order."""
-CANDIDATE_TERMS = (
-    "bias_instability",
-    "rate_random_walk",
-    "rate_ramp",
-    "quantization",
-    "output_filter",
-    "decimation_filter",
-    "butterworth_filter",
-    "biquad_filter",
-)
-"""The terms ``auto`` tries beside white noise (at most one output filter shape)."""
+"""The three terms most datasheets quote (the default before ``auto``, and a fleet's)."""
 
 
 def parse_terms(spec: str) -> tuple[str, ...] | Literal["auto"]:
-    """Noise terms from ``--terms`` (comma-separated names or aliases, ``all`` for every term
-    with the one-tap output filter, or ``auto``), in the canonical order; the bias is always
-    part of the model."""
+    """Noise terms from ``--terms`` / ``terms=`` (comma-separated names or aliases, ``all`` for
+    every term with the one-tap output filter, or ``auto``), in the canonical order; the bias
+    is always part of the model.
+
+    Raises
+    ------
+    InputError
+        An unknown name (the message lists the names there are), or terms that make no model
+        (:func:`check_terms`).
+    """
     word = spec.strip().lower()
     if word == AUTO:
         return AUTO
@@ -115,30 +93,37 @@ def parse_terms(spec: str) -> tuple[str, ...] | Literal["auto"]:
         if not name or name == "bias":
             continue
         if name not in TERM_ALIASES:
+            aliases = sorted({a for a in TERM_ALIASES if a not in TERMS})
             raise InputError(
-                f"--terms: unknown term '{word.strip()}'",
-                fix="choose from white, bias_instability, rate_random_walk, quantization, "
-                "rate_ramp, output_filter, decimation_filter, butterworth_filter, biquad_filter "
-                "(or rrw, flicker, ramp, all, auto)",
+                f"terms: unknown term '{word.strip()}'",
+                fix=f"choose from {', '.join(ALL_TERMS)} (or {', '.join(aliases)}, all, auto)",
             )
         terms.add(TERM_ALIASES[name])
     return check_terms(tuple(t for t in ALL_TERMS if t in terms))
 
 
 def check_terms(terms: tuple[str, ...]) -> tuple[str, ...]:
-    """``terms`` (canonical names) if they make a model, else :class:`InputError`."""
-    unknown = [t for t in terms if t not in PARAMETERS_OF_TERM]
+    """``terms`` (canonical names) in the canonical order, if they make a model.
+
+    Raises
+    ------
+    InputError
+        An unknown term, no stochastic term, a filter shape without white noise, or two
+        filter shapes.
+    """
+    unknown = [t for t in terms if t not in TERMS]
     if unknown:
-        raise InputError(f"terms: unknown term {unknown[0]!r}", fix="see parse_terms")
-    if not set(terms) & {"white", "bias_instability", "rate_random_walk", "quantization"}:
-        raise InputError("--terms: the model needs at least one noise term (e.g. white)")
+        raise InputError(f"terms: unknown term {unknown[0]!r}", fix=f"choose from {ALL_TERMS}")
+    stochastic = [t for t in terms if TERMS[t].filter_shape is None and TERMS[t].mean_rate is None]
+    if not stochastic:
+        raise InputError("terms: the model needs at least one noise term (e.g. white)")
     filters = [t for t in terms if t in FILTER_SHAPE_OF_TERM]
     if filters and "white" not in terms:
-        raise InputError(f"--terms: {filters[0]} shapes the white noise; add white")
+        raise InputError(f"terms: {filters[0]} shapes the white noise; add white")
     if len(filters) > 1:
         raise InputError(
-            f"--terms: one output filter shape at a time ({', '.join(filters)} given)",
-            fix="keep one of them, or use --terms auto to let the record choose",
+            f"terms: one output filter shape at a time ({', '.join(filters)} given)",
+            fix="keep one of them, or choose the terms by evidence (auto)",
         )
     return tuple(t for t in ALL_TERMS if t in terms)
 
@@ -171,13 +156,67 @@ def term_parameters(terms: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(p for term in terms for p in PARAMETERS_OF_TERM[term])
 
 
-BASELINE_TERMS = (
-    "white",
-    "output_filter",
-    "bias_instability",
-    "rate_random_walk",
-    "quantization",
-    "gauss_markov",
-    "rate_ramp",
-)
-"""The noise terms a discovery baseline may hold (the noise terms of the effect catalogue)."""
+def parameter(name: str) -> Parameter:
+    """The noise parameter ``name``.
+
+    Raises
+    ------
+    ValueError
+        An unknown parameter (the message lists those there are).
+    """
+    if name not in PARAMETERS:
+        raise ValueError(
+            f"unknown noise parameter {name!r}; expected bias or one of {tuple(PARAMETERS)}"
+        )
+    return PARAMETERS[name]
+
+
+def parameter_unit(name: str, channel_unit: str) -> str:
+    """Unit of a noise parameter (or of the bias) for a channel in ``channel_unit`` (IEEE Std
+    952; ASCII, e.g. ``deg/s/sqrt(Hz)``).
+
+    Raises
+    ------
+    ValueError
+        An unknown parameter.
+    """
+    if name == "bias":
+        return channel_unit
+    return parameter(name).unit_for(channel_unit)
+
+
+def display_values(name: str, value: float, channel_unit: str) -> dict[str, float]:
+    """The value of noise parameter ``name`` (in :func:`parameter_unit`) in the units IMU
+    datasheets use for a channel of that kind (deg/sqrt(h), deg/h, µg/sqrt(Hz) ...): each
+    conventional unit -> the value; empty for a channel whose unit bayescal does not know."""
+    quantity = parse_unit(channel_unit).quantity
+    labels = PARAMETERS[name].display.get(quantity, ()) if name in PARAMETERS else ()
+    unit = parameter_unit(name, channel_unit)
+    return {label: convert(value, unit, label) for label in labels}
+
+
+def card_values(card, channel_unit: str) -> dict[str, tuple[float, str]]:
+    """The noise parameters a sensor card gives for a channel in ``channel_unit`` (its
+    section for that kind of sensor, :meth:`~bayescal.SensorCard.section`), each in its unit
+    with where in the datasheet it comes from.
+
+    Raises
+    ------
+    InputError
+        The channel's unit is no angular rate or acceleration, the card has no section for
+        it, or an entry's unit is of another dimension than its parameter's.
+    """
+    section = card.section(channel_unit)
+    values = {}
+    for term in NOISE_TERMS:
+        try:
+            values |= term.card_values(section, channel_unit)
+        except ValueError as error:
+            raise InputError(f"sensor card {card.name}: {error}", source=str(card.path)) from None
+    return values
+
+
+def reference_scales(allan) -> dict[str, float]:
+    """The level of each noise parameter the classical Allan curve allows (its upper bound,
+    DESIGN.md table): the centres of the weakly informative priors, and the ramp's scale."""
+    return {k: v for term in NOISE_TERMS for k, v in term.reference_scales(allan).items()}

@@ -47,9 +47,11 @@ import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
-from ._components import SPECTRAL_COMPONENTS, block_covariance_basis, component_weights
+from ._components import Components
 from ._noise_problem import NoisePrior
+from ._terms import PARAMETERS
 from ._whittle import spectral_summary, whittle_log_likelihood
+from .effects._parameter import Context
 
 MAX_BLOCKS = 96
 MAX_DEGREE = 4
@@ -160,14 +162,15 @@ class ThermalProblem(eqx.Module):
         return self.prior_mean, precision, -2 * jnp.sum(jnp.log(jnp.diag(factor)))
 
     def natural(self, theta):
-        transform = {"F": jnp.tanh}
+        """The noise parameters at ``theta``, each from its term's coordinate."""
+        context = Context(self.spectral.rate_hz, self.spectral.duration_s)
         return {
-            name: transform.get(name, jnp.exp)(theta[..., index])
+            name: PARAMETERS[name].natural(theta[..., index], context)
             for index, name in enumerate(self.noise_prior.parameters)
         }
 
     def weights(self, theta):
-        return component_weights(**self.natural(theta))
+        return self.spectral.components.weights(self.natural(theta))
 
     def conditional(self, theta):
         """Precision and mean of the regression given the noise (and drift), and the pieces
@@ -237,12 +240,15 @@ def thermal_problem(
             for a, b in zip(start, stop, strict=True)
         ]
     )
+    if spectral is None:
+        spectral = record_spectrum(record, noise_prior.terms)
     # Periods are independent; the slow noise of each starts afresh at its first sample.
-    basis = np.zeros((len(SPECTRAL_COMPONENTS), start.size, start.size))
+    components = spectral.components
+    basis = np.zeros((len(components.shapes), start.size, start.size))
     for period in np.unique(owner):
         rows = np.flatnonzero(owner == period)
         first = record.periods[period][0]
-        basis[:, rows[:, None], rows[None, :]] = block_covariance_basis(
+        basis[:, rows[:, None], rows[None, :]] = components.block_covariances(
             start[rows] - first, stop[rows] - first, record.rate_hz
         )
     mean = np.zeros(degree + 1)
@@ -280,8 +286,6 @@ def thermal_problem(
                 [np.zeros((offset_mean.size, degree + 1)), np.diag(offset_precision)],
             ]
         )
-    if spectral is None:
-        spectral = record_spectrum(record)
     block_seconds = float(np.median(stop - start)) / record.rate_hz
     high = (spectral.frequency_hz > 1.0 / block_seconds).astype(float)
     return ThermalProblem(
@@ -312,10 +316,12 @@ def _drift_shape(degree: int, reference: float, calibrated_range) -> np.ndarray:
     return half ** -np.arange(degree + 1.0)
 
 
-def record_spectrum(record: ThermalRecord):
-    """The Whittle summary of a record's periods (no increment bridges two periods)."""
+def record_spectrum(record: ThermalRecord, terms) -> object:
+    """The Whittle summary of a record's periods (no increment bridges two periods), with the
+    components of the noise ``terms``."""
     joined = np.concatenate([np.append(record.values[a:b], np.nan) for a, b in record.periods])
-    return spectral_summary(joined, record.rate_hz)
+    components = Components.of(terms, Context(record.rate_hz, joined.size / record.rate_hz))
+    return spectral_summary(joined, record.rate_hz, components=components)
 
 
 def prequential_score(problem: ThermalProblem, theta, skip: int) -> np.ndarray:

@@ -3,22 +3,17 @@ stationary noise of :mod:`._noise_model`, whose parameters both sections share.
 
 Given the noise, each section's level is Gaussian (its turn-on level, :mod:`._level`). When
 both sections come from one file, the offset may drift between their starts by the noise
-model's own random walk and flicker over that time (:func:`offset_drift_weights`); the offset
+model's own slow terms over that time (:func:`offset_drift_variance`); the offset
 reported is the one at the start of the up section (the turn-on convention). g_local keeps its
 prior: the data cannot tell it from the scale.
 """
 
-import numpy as np
-
-from ._components import SPECTRAL_COMPONENTS
-from .effects.bias_instability import BiasInstability
+from ._terms import TERMS
 
 
-def offset_drift_weights(gap_s: float, rate_hz: float) -> np.ndarray:
-    """Variance of the noise level's change over ``gap_s`` seconds per unit weight of each
-    spectral component: t for the random walk (K^2 t), flicker's structure function at
-    h = t fs samples, nothing for the stationary terms."""
-    weights = dict.fromkeys(SPECTRAL_COMPONENTS, 0.0)
-    weights["bias_instability"] = BiasInstability.structure_function(gap_s * rate_hz)
-    weights["rate_random_walk"] = gap_s
-    return np.array([weights[name] for name in SPECTRAL_COMPONENTS])
+def offset_drift_variance(gap_s: float, values: dict, rate_hz: float, terms) -> object:
+    """Variance of the noise level's change over ``gap_s`` seconds under the noise ``values``
+    (parameters by name; arrays broadcast) of ``terms``: each term's
+    :meth:`~bayescal.models.effects._base.NoiseTerm.level_change_variance` (K^2 t for the
+    random walk, flicker's structure function, nothing for the stationary terms)."""
+    return sum(TERMS[name].level_change_variance(gap_s, values, rate_hz) for name in terms)

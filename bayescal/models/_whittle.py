@@ -65,8 +65,7 @@ from scipy import fft
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
-from ..recording._series import gap_free_runs, is_spooled, read
-from ._components import SPECTRAL_TERMS, increment_autocovariance_shapes
+from ..recording._series import gap_free_runs, is_spooled, read, series_size
 
 TAPER_FRACTION = 0.1
 BIN_WIDTH = 0.02
@@ -99,13 +98,23 @@ class SpectralSummary(eqx.Module):
     """Taper-weighted mean increment of each segment."""
     mean_basis: np.ndarray
     """(components, segments): variance of the mean increment per unit weight."""
+    duration_s: np.ndarray
+    """The record's length, s (samples spanned / rate)."""
     rate_hz: float = eqx.field(static=True)
+    components: object = eqx.field(static=True, default=None)
+    """The spectral components of the basis's first rows
+    (:class:`~bayescal.models._components.Components`); any extra ones follow."""
     cross: np.ndarray | None = None
     """(3, regressors, bins): sum_j Re(conj(Y_j) X_j) hat_k(u_j) over each bin."""
     gram: np.ndarray | None = None
     """(3, regressors, regressors, bins): sum_j Re(conj(X_ij) X_lj) hat_k(u_j)."""
     mean_regressor: np.ndarray | None = None
     """(segments, regressors): taper-weighted mean increment of each regressor."""
+
+    @property
+    def shaped(self) -> np.ndarray:
+        """Indices of the components an output filter's low-pass shapes (the white noise's)."""
+        return self.components.shaped
 
     @property
     def n_bins(self) -> int:
@@ -191,31 +200,32 @@ def _all_lags_expected(autocovariance: np.ndarray, autocorrelation: np.ndarray, 
     return fft.rfft(symmetric).real[2 * index]
 
 
-@functools.lru_cache(maxsize=4)
+@functools.lru_cache(maxsize=8)
 def _expected_periodogram(
-    length: int, rate_hz: float, taper_fraction: float, index: tuple[int, ...]
+    length: int, rate_hz: float, taper_fraction: float, index: tuple[int, ...], shapes: tuple
 ) -> np.ndarray:
-    """(terms, len(index)): expected tapered periodogram of each term per unit parameter^2 at
-    the Fourier frequencies index / M, and (index 0) at zero frequency.
+    """(components, len(index)): expected tapered periodogram of each of ``shapes`` (spectral
+    components, :mod:`._components`) per unit weight at the Fourier frequencies index / M,
+    and (index 0) at zero frequency.
 
     sum over lags tau of r(tau) c(tau) e^{-2 pi i nu tau} / sum h^2, with c the taper's
-    autocorrelation: a few lags for the moving-average terms, all lags (one FFT) for flicker.
-    Cached: it depends on the record only through its length.
+    autocorrelation: a few lags for the moving-average shapes, all lags (one FFT) for those
+    of long memory. Cached: it depends on the record only through its length.
     """
     taper, autocorrelation = _taper(length, taper_fraction)
     index = np.asarray(index)
     frequency = index / length
     short_lags = np.arange(3)
-    short = increment_autocovariance_shapes(short_lags, rate_hz)
     expected = []
-    for term in SPECTRAL_TERMS:
-        if term.long_memory:  # all lags
-            memory = term.autocovariance(np.arange(length, dtype=float), rate_hz)
+    for shape in shapes:
+        if shape.long_memory:  # all lags
+            memory = shape.autocovariance(np.arange(length, dtype=float), rate_hz)
             expected.append(_all_lags_expected(memory, autocorrelation, index))
         else:
-            weights = short[term.name] * autocorrelation[:3] * np.array([1.0, 2.0, 2.0])
+            short = shape.autocovariance(short_lags.astype(float), rate_hz)
+            weights = short * autocorrelation[:3] * np.array([1.0, 2.0, 2.0])
             expected.append(np.cos(2 * np.pi * np.outer(frequency, short_lags)) @ weights)
-    return np.array(expected) / np.sum(taper**2)
+    return np.array(expected).reshape(len(shapes), index.size) / np.sum(taper**2)
 
 
 def _extra_expected(length: int, taper_fraction: float, index, components) -> np.ndarray:
@@ -259,6 +269,7 @@ def spectral_summary(
     values,
     rate_hz: float,
     *,
+    components,
     taper_fraction: float = TAPER_FRACTION,
     bin_width: float = BIN_WIDTH,
     regressors=None,
@@ -266,10 +277,11 @@ def spectral_summary(
 ) -> SpectralSummary:
     """Summarise a rate series (NaN marks missing samples) for the Whittle likelihood.
 
-    ``regressors``: (samples, p) deterministic terms whose coefficients the likelihood takes
+    ``components``: the spectral components of the terms the likelihood may hold
+    (:class:`~bayescal.models._components.Components`); ``regressors``: (samples, p)
+    deterministic terms whose coefficients the likelihood takes
     (:func:`whittle_log_likelihood`, ``beta``); ``extra_components``: functions of the lag
-    giving the increment autocovariance of stationary terms beyond the spectral components
-    (:data:`~bayescal.models._components.SPECTRAL_COMPONENTS`), appended to the basis in
+    giving the increment autocovariance of further stationary terms, appended to the basis in
     that order."""
     regressors = None if regressors is None else np.asarray(regressors, dtype=float)
     cross, gram, mean_regressor = [], [], []
@@ -323,7 +335,9 @@ def spectral_summary(
         index = (0, *nodes.ravel().tolist())
         expected = np.concatenate(
             (
-                _expected_periodogram(length, float(rate_hz), taper_fraction, index),
+                _expected_periodogram(
+                    length, float(rate_hz), taper_fraction, index, components.shapes
+                ),
                 _extra_expected(length, taper_fraction, index, extra_components),
             )
         )
@@ -371,7 +385,9 @@ def spectral_summary(
         weight=pooled(weight, False),
         mean_increment=np.array(mean_increment),
         mean_basis=np.array(mean_basis).T,
+        duration_s=np.asarray(series_size(values) / rate_hz),
         rate_hz=float(rate_hz),
+        components=components,
         **regression,
     )
 
@@ -380,16 +396,16 @@ def node_spectrum(summary: SpectralSummary, variances, filtered=None):
     """(..., 3, bins): the expected periodogram at the bins' nodes.
 
     ``filtered``: (gain, white) of a low-pass shape on the white noise — its |H|^2 at the
-    nodes (3, bins) and the weights of the white noise's two components it shapes; the
+    nodes (3, bins) and the weights of the components it shapes (:attr:`SpectralSummary.
+    shaped`); the
     ``variances`` then hold everything the filter does not shape (the other terms, a rounding
     floor after the filter). Kept apart, a deep stop band is no difference of near-equal
     numbers."""
     spectrum = jnp.einsum("...t,tkb->...kb", jnp.asarray(variances), summary.basis)
     if filtered is not None:
         gain, white = filtered
-        spectrum = spectrum + gain * jnp.einsum(
-            "...c,ckb->...kb", jnp.asarray(white), summary.basis[:2]
-        )
+        shaped = summary.basis[summary.shaped]
+        spectrum = spectrum + gain * jnp.einsum("...c,ckb->...kb", jnp.asarray(white), shaped)
     return spectrum
 
 
@@ -409,7 +425,7 @@ def _bin_coefficients(summary: SpectralSummary, variances, filtered=None):
 def whittle_log_likelihood(summary: SpectralSummary, variances, ramp=0.0, beta=None, filtered=None):
     """Pointwise log-likelihood: one value per frequency bin, then one per segment for the
     mean increment. ``variances`` are the weights of the spectral components
-    (:func:`~bayescal.models._components.component_weights`, then any extra components),
+    (:meth:`~bayescal.models._components.Components.weights`, then any extra components),
     ``ramp`` is R, ``beta`` the coefficients of the summary's regressors (the data minus X
     beta), ``filtered`` a low-pass shape on the white noise, ``variances`` then holding the
     rest (:func:`node_spectrum`)."""
@@ -427,7 +443,8 @@ def whittle_log_likelihood(summary: SpectralSummary, variances, ramp=0.0, beta=N
     bins = -summary.weight * (log_sum + jnp.sum(coefficients * moments, axis=0))
     variance = jnp.einsum("t,ts->s", variances, summary.mean_basis)
     if filtered is not None:  # unit gain at zero frequency: the mean increment's as unfiltered
-        variance = variance + jnp.einsum("c,cs->s", filtered[1], summary.mean_basis[:2])
+        shaped = summary.mean_basis[summary.shaped]
+        variance = variance + jnp.einsum("c,cs->s", filtered[1], shaped)
     residual = mean_increment - ramp / summary.rate_hz
     mean_terms = -0.5 * (jnp.log(2 * jnp.pi * variance) + residual**2 / variance)
     return jnp.concatenate((bins, mean_terms))

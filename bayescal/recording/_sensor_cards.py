@@ -5,9 +5,10 @@ A card is a TOML file in ``models/`` (or in the folder named by ``BAYESCAL_MODEL
 datasheet it comes from (the schema is in models/README.md). For a channel, the section is
 chosen by the channel's unit (an angular rate or an acceleration).
 
-The "in-run bias stability" of datasheets is the minimum of the Allan deviation, so
-B = that / 0.664 (IEEE 952); noise densities and random walks are the same quantity N in
-different units. How the figures become priors: :mod:`bayescal.inference._priors`.
+Which entry gives which noise parameter, and in what unit, is each noise term's to say
+(:meth:`~bayescal.models.effects._base.NoiseTerm.card_values`; all of them:
+:func:`~bayescal.models._terms.card_values`); how the figures become priors:
+:mod:`bayescal.inference._priors`.
 """
 
 import os
@@ -16,11 +17,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .._errors import InputError
-from ._units import BIAS_INSTABILITY_FACTOR, card_value_in, parse_unit
+from ._units import parse_unit
 
 SCHEMA_VERSION = 1
 _SECTION_OF_QUANTITY = {"angular_rate": "gyro", "acceleration": "accelerometer"}
-_WHITE_ENTRIES = ("noise_density", "angle_random_walk", "velocity_random_walk")
 
 
 @dataclass(frozen=True)
@@ -83,49 +83,6 @@ class SensorCard:
                 fix="choose a card for this kind of sensor (bayescal sensors)",
             )
         return self.content[section]
-
-    def datasheet_values(self, unit: str) -> dict[str, tuple[float, str]]:
-        """N, B and K from the card, in the channel's parameter units, each with its source.
-
-        The datasheet's "in-run bias stability" is the minimum of the Allan deviation, so
-        B = that / 0.664 (IEEE Std 952) unless the card defines it otherwise.
-
-        Parameters
-        ----------
-        unit : str
-            The channel's unit; N is returned in unit/√Hz, B in unit, K in unit·√Hz.
-
-        Returns
-        -------
-        dict
-            Parameter name (``N``, ``B``, ``K``; those the card gives) -> (value, where in
-            the datasheet it comes from).
-
-        Raises
-        ------
-        InputError
-            As :meth:`section`.
-        """
-        section = self.section(unit)
-        values = {}
-        for entry in _WHITE_ENTRIES:
-            if entry in section:
-                item = section[entry]
-                values["N"] = (
-                    card_value_in("N", item["value"], item["unit"], unit),
-                    item["source"],
-                )
-                break
-        if "bias_instability" in section:
-            item = section["bias_instability"]
-            value = card_value_in("B", item["value"], item["unit"], unit)
-            if item.get("definition", "allan_minimum") == "allan_minimum":
-                value /= BIAS_INSTABILITY_FACTOR
-            values["B"] = (value, item["source"])
-        if "rate_random_walk" in section:
-            item = section["rate_random_walk"]
-            values["K"] = (card_value_in("K", item["value"], item["unit"], unit), item["source"])
-        return values
 
 
 def models_folder() -> Path:
@@ -191,8 +148,8 @@ def find_card(name: str) -> SensorCard:
     --------
     >>> import bayescal as bc
     >>> card = bc.find_card("mpu_6050")
-    >>> card.name, sorted(card.datasheet_values("deg/s"))
-    ('MPU-6050', ['N'])
+    >>> card.name, card.section("deg/s")["noise_density"]["unit"]
+    ('MPU-6050', 'deg/s/sqrt(Hz)')
     """
     wanted = name.strip().lower().replace("_", "-")
     cards = sensor_cards()

@@ -1,9 +1,12 @@
-"""Units of IMU channels and of the noise parameters derived from them.
+"""Units of IMU channels, and the algebra that converts the units derived from them.
 
 A channel's unit U is either one bayescal knows (angular rate, acceleration, angle, velocity,
 temperature, time) or an opaque label such as ``LSB``; opaque units are carried through
-unchanged and never converted. Noise-parameter units follow IEEE Std 952 / ../shared/DESIGN.md:
-Q in U·s, N in U/√Hz, B in U, K in U·√Hz, R in U/s (written in ASCII, e.g. ``deg/s/sqrt(Hz)``).
+unchanged and never converted. A noise parameter's unit is U times a power of time (IEEE Std
+952 / ../shared/DESIGN.md; :func:`time_scaled_unit`, written in ASCII, e.g.
+``deg/s/sqrt(Hz)``); which power is the noise term's to say
+(:mod:`bayescal.models.effects`), and :func:`convert` turns a value between any two units of
+one dimension (a datasheet's ``deg/h/sqrt(h)``, a display's ``deg/sqrt(h)``).
 """
 
 import math
@@ -12,10 +15,6 @@ from dataclasses import dataclass
 
 STANDARD_GRAVITY = 9.80665  # m/s^2, CGPM 1901 (the unit "g")
 DEG = math.pi / 180.0
-FLICKER_ALLAN_FACTOR = 2 * math.log(2) / math.pi
-"""Allan variance of flicker noise per unit B^2 (IEEE Std 952, eq. C.9)."""
-BIAS_INSTABILITY_FACTOR = math.sqrt(FLICKER_ALLAN_FACTOR)
-"""0.664: the floor of the Allan deviation per unit B, IEEE Std 952 eq. (C.9)."""
 
 
 @dataclass(frozen=True)
@@ -117,8 +116,6 @@ _INTEGRAL = {
     "µg": "µg*s",
 }
 _PER_SECOND = {"deg/s": "deg/s^2", "rad/s": "rad/s^2", "m/s^2": "m/s^3"}
-
-NOISE_PARAMETERS = ("Q", "N", "B", "K", "R")
 # Opaque units that are expected: a converter's counts, an analog output's volts.
 _COUNT_UNITS = {"lsb", "lsbs", "count", "counts", "cnt", "digits", "raw", "adc", "a.u.", "au"}
 _COUNT_UNITS |= {"v", "mv", "dn"}
@@ -158,100 +155,139 @@ def integral_unit(unit: str) -> str:
     return _INTEGRAL.get(unit, f"{unit}*s")
 
 
-def noise_parameter_unit(parameter: str, unit: str) -> str:
-    """Unit of noise parameter Q, N, B, K or R for a rate signal in ``unit`` (IEEE Std 952),
-    or of the output filter coefficient F."""
-    match parameter:
-        case "Q":
-            return integral_unit(unit)
-        case "N":
-            return f"{unit}/sqrt(Hz)"
-        case "B" | "bias":
-            return unit
-        case "K":
-            return f"{unit}*sqrt(Hz)"
-        case "R":
-            return _PER_SECOND.get(unit, f"{unit}/s")
-        case "F":
-            return "1"  # the output filter's coefficient is a pure number
-    raise ValueError(f"unknown noise parameter {parameter!r}; expected one of {NOISE_PARAMETERS}")
+def per_second_unit(unit: str) -> str:
+    """Unit of the time derivative of a quantity in ``unit`` (deg/s -> deg/s^2)."""
+    return _PER_SECOND.get(unit, f"{unit}/s")
 
 
-# Conventional display units: per quantity and parameter, (unit label, factor from SI).
-_DISPLAY = {
-    "angular_rate": {
-        "N": (("deg/sqrt(h)", 60.0 / DEG),),
-        "B": (("deg/h", 3600.0 / DEG),),
-        "K": (("deg/h/sqrt(h)", 3600.0**1.5 / DEG),),
-        "Q": (("arcsec", 3600.0 / DEG),),
-        "R": (("deg/h^2", 3600.0**2 / DEG),),
-    },
-    "acceleration": {
-        "N": (("µg/sqrt(Hz)", 1e6 / STANDARD_GRAVITY), ("m/s/sqrt(h)", 60.0)),
-        "B": (("µg", 1e6 / STANDARD_GRAVITY),),
-        "K": (("µg*sqrt(Hz)", 1e6 / STANDARD_GRAVITY),),
-        "Q": (("m/s", 1.0),),
-        "R": (("µg/s", 1e6 / STANDARD_GRAVITY),),
-    },
-}
+def time_scaled_unit(unit: str, time_power: float) -> str:
+    """The unit ``unit`` times s^``time_power``, written as IEEE Std 952 writes noise
+    parameters for a rate in ``unit``: s^1 the integral (deg/s -> deg), s^(1/2) a density
+    (deg/s/sqrt(Hz)), s^0 the unit itself, s^(-1/2) deg/s*sqrt(Hz), s^-1 the derivative
+    (deg/s^2).
 
-
-def display_values(parameter: str, value: float, unit: str) -> dict[str, float]:
-    """The value of noise parameter ``parameter`` in the units IMU datasheets use.
-
-    ``value`` is in :func:`noise_parameter_unit` of ``unit``; the result maps each
-    conventional unit (deg/sqrt(h), deg/h, µg/sqrt(Hz) ...) to the converted value and is
-    empty for units bayescal does not know.
+    Raises
+    ------
+    ValueError
+        A power other than those five.
     """
-    parsed = parse_unit(unit)
-    table = _DISPLAY.get(parsed.quantity, {}).get(parameter, ())
-    return {label: value * parsed.to_si * factor for label, factor in table}
+    named = {
+        1.0: integral_unit,
+        0.5: lambda u: f"{u}/sqrt(Hz)",
+        0.0: lambda u: u,
+        -0.5: lambda u: f"{u}*sqrt(Hz)",
+        -1.0: per_second_unit,
+    }
+    if float(time_power) not in named:
+        raise ValueError(f"time_power={time_power!r}: one of 1, 1/2, 0, -1/2, -1")
+    return named[float(time_power)](unit)
 
 
-# Units sensor cards (datasheets) give noise parameters in -> factor to SI parameter units
-# (rad/s or m/s^2 based; sqrt(Hz) = 1/sqrt(s)).
-_CARD_UNITS = {
-    "N": {
-        "deg/s/sqrt(Hz)": DEG,
-        "mdps/sqrt(Hz)": 1e-3 * DEG,
-        "rad/s/sqrt(Hz)": 1.0,
-        "deg/h/sqrt(Hz)": DEG / 3600.0,
-        "deg/sqrt(h)": DEG / 60.0,
-        "ug/sqrt(Hz)": 1e-6 * STANDARD_GRAVITY,
-        "mg/sqrt(Hz)": 1e-3 * STANDARD_GRAVITY,
-        "m/s^2/sqrt(Hz)": 1.0,
-        "m/s/sqrt(h)": 1.0 / 60.0,
-        "ft/s/sqrt(h)": 0.3048 / 60.0,
-    },
-    "B": {
-        "deg/h": DEG / 3600.0,
-        "deg/s": DEG,
-        "mg": 1e-3 * STANDARD_GRAVITY,
-        "ug": 1e-6 * STANDARD_GRAVITY,
-        "m/s^2": 1.0,
-    },
-    "K": {
-        "deg/h/sqrt(h)": DEG / 3600.0**1.5,
-        "deg/s*sqrt(Hz)": DEG,
-        "ug*sqrt(Hz)": 1e-6 * STANDARD_GRAVITY,
-        "m/s^2*sqrt(Hz)": 1.0,
-    },
+# The unit algebra: every unit a noise figure is written in (a datasheet's, a display's, a
+# channel's) as a factor to SI and the powers of its dimensions (angle, length, time), so
+# that any two units of one dimension convert and two of different dimensions are refused.
+# Angle is a dimension here (SI makes it a number): deg/h and 1/h must not convert.
+_ANGLE, _LENGTH, _TIME = (1, 0, 0), (0, 1, 0), (0, 0, 1)
+_ACCELERATION = (0, 1, -2)
+_ATOMS = {
+    "rad": (1.0, _ANGLE),
+    "mrad": (1e-3, _ANGLE),
+    "deg": (DEG, _ANGLE),
+    "arcmin": (DEG / 60.0, _ANGLE),
+    "arcsec": (DEG / 3600.0, _ANGLE),
+    "s": (1.0, _TIME),
+    "sec": (1.0, _TIME),
+    "ms": (1e-3, _TIME),
+    "us": (1e-6, _TIME),
+    "min": (60.0, _TIME),
+    "h": (3600.0, _TIME),
+    "hr": (3600.0, _TIME),
+    "Hz": (1.0, (0, 0, -1)),
+    "m": (1.0, _LENGTH),
+    "ft": (0.3048, _LENGTH),
+    "g": (STANDARD_GRAVITY, _ACCELERATION),
+    "mg": (1e-3 * STANDARD_GRAVITY, _ACCELERATION),
+    "ug": (1e-6 * STANDARD_GRAVITY, _ACCELERATION),
+    "µg": (1e-6 * STANDARD_GRAVITY, _ACCELERATION),
+    "μg": (1e-6 * STANDARD_GRAVITY, _ACCELERATION),
+    "dps": (DEG, (1, 0, -1)),
+    "mdps": (1e-3 * DEG, (1, 0, -1)),
+    "1": (1.0, (0, 0, 0)),
 }
+_TOKEN = re.compile(r"\s*(sqrt\(|[A-Za-zµμ]+|[0-9.]+|[*/^()])")
 
 
-def card_value_in(parameter: str, value: float, card_unit: str, channel_unit: str) -> float:
-    """A datasheet value of noise parameter N, B or K, converted to the parameter's unit for
-    a channel in ``channel_unit`` (:func:`noise_parameter_unit`)."""
-    factors = _CARD_UNITS[parameter]
-    if card_unit not in factors:
-        raise ValueError(
-            f"unit '{card_unit}' is not one a sensor card may give {parameter} in; "
-            f"use one of {', '.join(factors)}"
-        )
-    channel = parse_unit(channel_unit)
-    if not channel.known:
-        raise ValueError(f"the channel's unit '{channel_unit}' is not a physical unit")
-    return value * factors[card_unit] / channel.to_si
+def _tokens(text: str) -> list[str]:
+    tokens, position = [], 0
+    text = text.strip()
+    while position < len(text):
+        match = _TOKEN.match(text, position)
+        if match is None:
+            raise ValueError(f"unit {text!r}: cannot read {text[position:]!r}")
+        tokens.append(match[1])
+        position = match.end()
+    return tokens
+
+
+def _dimensioned(text: str) -> tuple[float, tuple[float, float, float]]:
+    """(factor to SI, powers of angle, length and time) of a unit written with names,
+    ``*``, ``/``, ``^`` and ``sqrt(...)`` (``deg/h/sqrt(h)``, ``µg*sqrt(Hz)``, ``m/s^2``);
+    ``/`` and ``*`` associate to the left, ``^`` binds a name or a bracket."""
+    tokens = _tokens(text)
+
+    def power(factor, dims, exponent):
+        return factor**exponent, tuple(d * exponent for d in dims)
+
+    def atom(index):
+        token = tokens[index] if index < len(tokens) else ""
+        if token in ("(", "sqrt("):
+            factor, dims, index = product(index + 1)
+            if index >= len(tokens) or tokens[index] != ")":
+                raise ValueError(f"unit {text!r}: a bracket is not closed")
+            index += 1
+            if token == "sqrt(":
+                factor, dims = power(factor, dims, 0.5)
+        elif token in _ATOMS:
+            (factor, dims), index = _ATOMS[token], index + 1
+        else:
+            raise ValueError(f"unit {text!r}: unknown unit {token!r}")
+        if index < len(tokens) and tokens[index] == "^":
+            if index + 1 >= len(tokens):
+                raise ValueError(f"unit {text!r}: a power without its exponent")
+            factor, dims = power(factor, dims, float(tokens[index + 1]))
+            index += 2
+        return factor, dims, index
+
+    def product(index):
+        factor, dims, index = atom(index)
+        while index < len(tokens) and tokens[index] in ("*", "/"):
+            sign = 1.0 if tokens[index] == "*" else -1.0
+            other, other_dims, index = atom(index + 1)
+            factor *= other**sign
+            dims = tuple(a + sign * b for a, b in zip(dims, other_dims, strict=True))
+        return factor, dims, index
+
+    factor, dims, index = product(0)
+    if index != len(tokens):
+        raise ValueError(f"unit {text!r}: unexpected {tokens[index]!r}")
+    return factor, dims
+
+
+def convert(value: float, from_unit: str, to_unit: str) -> float:
+    """``value`` in ``from_unit`` expressed in ``to_unit`` (``deg/s/sqrt(Hz)`` to
+    ``deg/sqrt(h)``: times 60); the units are read by their parts, so any two of one
+    dimension convert.
+
+    Raises
+    ------
+    ValueError
+        A unit that cannot be read, or two units of different dimensions (the message names
+        both).
+    """
+    (a, a_dims), (b, b_dims) = _dimensioned(from_unit), _dimensioned(to_unit)
+    if any(abs(x - y) > 1e-9 for x, y in zip(a_dims, b_dims, strict=True)):
+        raise ValueError(f"'{from_unit}' and '{to_unit}' measure different quantities")
+    return value * a / b
 
 
 _NUMBER = r"[-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"

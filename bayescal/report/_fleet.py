@@ -17,8 +17,8 @@ import numpy as np
 from ..capabilities._fleet import FleetFit
 from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN_ESS
 from ..inference._population import MIN_POINT_ESS, RESOLVED_LOG_SD
-from ..models._noise_model import parameter_unit
 from ..models._population import BIAS_SD_PRIOR_FACTOR, LOG_SD_PRIOR_SCALE
+from ..models._terms import parameter_unit
 from ._html import _STYLE, _esc, _image, _interval, _new_figure, _num, _png, pretty_unit
 
 _NAMES = {"N": "N white noise", "B": "B bias instability", "K": "K rate random walk"}

@@ -36,21 +36,15 @@ from .._errors import InputError
 from ..classical._noise import ClassicalNoise
 from ..inference._bands import allan_band, draw_subset, spectrum_band
 from ..inference._noise_posterior import NoisePosterior
-from ..models._noise_model import parameter_unit
+from ..models._terms import PARAMETERS, card_values, display_values, parameter_unit
 from ..recording._recording import Channel
-from ..recording._units import display_values
 
 DATASHEET_TOLERANCE = (0.8, 1.25)
 PAIR_POINTS = 800
-_POSITIVE = ("Q", "N", "B", "K")
-_PARAMETER_NAMES = {
-    "bias": "bias (turn-on)",
-    "Q": "Q quantization",
-    "N": "N white noise",
-    "B": "B bias instability",
-    "K": "K rate random walk",
-    "R": "R rate ramp",
-    "F": "F output filter",
+_POSITIVE = {name for name, p in PARAMETERS.items() if p.link in ("log", "log_logit")}
+"""Parameters drawn on a log axis: the scales (and time constants) of the noise terms."""
+_PARAMETER_NAMES = {"bias": "bias (turn-on)"} | {
+    name: f"{name} {p.meaning}" for name, p in PARAMETERS.items()
 }
 
 
@@ -120,8 +114,8 @@ def datasheet_comparison(card, analysis: ChannelAnalysis) -> dict | None:
     ``{"unavailable": reason}`` when the card has no section for this kind of channel."""
     unit = analysis.unit
     try:
-        values = card.datasheet_values(unit)
-    except (InputError, ValueError) as error:
+        values = card_values(card, unit)
+    except InputError as error:
         return {"card": card.name, "datasheet": card.datasheet, "unavailable": str(error)}
     bayesian = analysis.result.get("bayesian", {}).get("parameters", {})
     readings = analysis.result["classical"]["slope_readings"]

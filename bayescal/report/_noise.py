@@ -6,43 +6,22 @@ from importlib.metadata import version
 from typing import TYPE_CHECKING
 
 from ..classical._noise import ClassicalNoise, SlopeReading
-from ..models._terms import TERM_OF_PARAMETER
-from ..recording._units import display_values, noise_parameter_unit
+from ..models._terms import TERM_OF_PARAMETER, TERMS, display_values, parameter_unit
 
 if TYPE_CHECKING:  # the Bayesian modules load only for a Bayesian result (--classical-only)
     from ..capabilities._noise import NoiseFit
     from ..inference._noise_posterior import NoisePosterior
-
-# Why a classical number and the posterior can disagree, by parameter.
-_WHY = {
-    "N": "at tau = 1 s the -1/2 line also carries the other terms, which the model separates",
-    "B": "the flat floor of the Allan curve is where white noise meets the slower terms "
-    "(a rate random walk, a ramp), not necessarily bias instability",
-    "K": "the +1/2 stretch of the Allan curve also carries bias instability and drift",
-    "Q": "the -1 stretch of the Allan curve also carries white noise",
-}
-
-_LINE = {
-    "Q": "-1 line, extrapolated to tau = sqrt(3) s",
-    "N": "-1/2 line, extrapolated to tau = 1 s",
-    "K": "+1/2 line, extrapolated to tau = 3 s",
-}
 
 
 def _read_at(parameter: str, reading: SlopeReading) -> str:
     """Where a reading was taken, in words: the stretch of the curve it came from."""
     if reading.kind == "upper_bound":
         return f"upper bound, tightest at tau = {reading.tau_s:.3g} s: {reading.reason}"
-    if parameter == "B":
-        return f"flat floor at tau = {reading.tau_s:.3g} s / 0.664"
-    return (
-        f"stretch of slope {reading.local_slope:+.2f} at tau = {reading.tau_s:.3g} s on the "
-        f"{_LINE[parameter]}"
-    )
+    return reading.where
 
 
 def _reading(parameter: str, reading: SlopeReading, unit: str) -> dict:
-    unit_of_parameter = noise_parameter_unit(parameter, unit)
+    unit_of_parameter = parameter_unit(parameter, unit)
     return {
         "value": reading.value,
         "ci_low": reading.ci_low,
@@ -80,7 +59,6 @@ def _t_interval_explanation(classical: ClassicalNoise) -> str:
 
 def _bayesian_block(fit: "NoisePosterior", unit: str) -> dict:
     from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN_ESS
-    from ..models._noise_model import parameter_unit
 
     parameters = {}
     for name, summary in fit.parameters.items():
@@ -135,9 +113,8 @@ def comparison_notes(classical: ClassicalNoise, fit: "NoisePosterior", unit: str
     )
     ratio = bias.sd / t_sd
     slow = [
-        f"{name} = {fit.parameters[name].mean:.3g} {noise_parameter_unit(name, unit)}"
-        for name in ("K", "B", "R")
-        if name in fit.parameters
+        f"{name} = {fit.parameters[name].mean:.3g} {parameter_unit(name, unit)}"
+        for name in (TERMS[term].parameter for term in fit.terms if TERMS[term].band == "low")
     ]
     if ratio > 2:
         why = (
@@ -160,7 +137,7 @@ def comparison_notes(classical: ClassicalNoise, fit: "NoisePosterior", unit: str
         if name not in fit.parameters:
             continue
         posterior = fit.parameters[name]
-        unit_of_parameter = noise_parameter_unit(name, unit)
+        unit_of_parameter = parameter_unit(name, unit)
         if reading.kind == "upper_bound":
             if posterior.q05 > reading.ci_high:
                 # Read beyond the output filter's reach (classical._noise), the bound no
@@ -181,7 +158,7 @@ def comparison_notes(classical: ClassicalNoise, fit: "NoisePosterior", unit: str
                 f"{name}: classical {reading.value:.3g} [{reading.ci_low:.3g}, "
                 f"{reading.ci_high:.3g}] and Bayesian {posterior.mean:.3g} "
                 f"[{posterior.q05:.3g}, {posterior.q95:.3g}] {unit_of_parameter} disagree "
-                f"beyond their uncertainties: {_WHY[name]}"
+                f"beyond their uncertainties: {TERMS[TERM_OF_PARAMETER[name]].classical_caveat}"
             )
     return notes
 
@@ -266,7 +243,7 @@ def noise_result(
                 "unit": unit,
                 "white_floor": noise.lsb / math.sqrt(12 * noise.rate_hz),
                 "output_white_level": noise.output_white_level,
-                "density_unit": noise_parameter_unit("N", unit),
+                "density_unit": parameter_unit("N", unit),
                 "explanation": "the samples sit on a grid of this step: their rounding error "
                 "(LSB^2/12 per sample) is a known white floor in the model, so N is the "
                 "sensor's white noise without it; the output's white level adds it back",

@@ -22,7 +22,12 @@ import math
 from typing import ClassVar, Protocol
 
 import equinox as eqx
+import jax.numpy as jnp
 import numpy as np
+
+from ... import _x64  # noqa: F401  (float64 before any JAX array)
+from ...recording._units import convert
+from ._parameter import Context, Parameter
 
 GRID_POINTS = 6
 """Points of the log grid a time constant is first searched on."""
@@ -142,17 +147,161 @@ class SlotTerm(Effect):
 
 
 class NoiseTerm(SlotTerm):
-    """A stochastic term of the stationary noise model (abstract).
+    """A term of the stationary noise model (abstract): one class in one file, registered once
+    in :data:`bayescal.models._terms.NOISE_TERMS`, from which the model, the term search, the
+    priors, the units, the report and the command line read it.
 
-    It adds one component to the spectrum of the sample increments: a fixed shape times a
-    weight, the square of its parameter. Each concrete term gives, per unit weight, the
-    increments' autocovariance (numpy, integer lags), their two-sided spectrum (per cycle per
-    sample), the covariance of block means (the nonstationary terms started at the first
-    sample), and its Allan variance.
+    A term declares its name and aliases, its parameters (:class:`Parameter`: unit, display
+    units, coordinate and prior), its classical reading and the sensor-card entries that give
+    it, and computes, from its parameters by name (``values``; JAX arrays broadcast):
+
+    - its *components* of the spectrum of the sample increments (:meth:`components`): each a
+      fixed shape — the increments' autocovariance (numpy, integer lags), their two-sided
+      spectrum (per cycle per sample), the covariance of block means (the nonstationary
+      terms started at the first sample) — times a weight (:meth:`weights`); the likelihoods
+      of bayescal take their expected periodograms once per record and the weights at every
+      draw;
+    - its Allan variance (:meth:`allan_variance`) and the power-law exponents that dominate it
+      (:meth:`allan_exponents`, for the EDF of a check);
+    - its samples (:meth:`sample`), from the PRNG streams it owns (:attr:`streams`).
+
+    The output filter's shapes shape the white noise instead (:attr:`filter_shape`,
+    :meth:`gain`), and the ramp adds to the mean increment (:attr:`mean_rate`).
     """
 
-    long_memory: eqx.AbstractClassVar[bool]
+    aliases: ClassVar[tuple[str, ...]] = ()
+    """Other names a user may give it (``--terms``, ``terms=``), lower case."""
+    parameters: ClassVar[tuple[Parameter, ...]] = ()
+    """Its parameters, in order."""
+    candidate: ClassVar[bool] = True
+    """Whether ``terms="auto"`` tries it (white noise is always in the model)."""
+    filter_shape: ClassVar[str | None] = None
+    """The output filter's shape it is (one filter shape per model), or None."""
+    mean_rate: ClassVar[str | None] = None
+    """The parameter that is a steady drift of the mean (the ramp), or None."""
+    streams: ClassVar[tuple[int, ...]] = ()
+    """Indices of the PRNG streams its samples draw on (``jax.random.split`` of a model's key;
+    fixed forever: the same seed gives the same record in every release)."""
+    reading: ClassVar[object] = None
+    """Its classical reading off the Allan deviation (:mod:`bayescal.classical._noise`:
+    IEEE Std 952 Annex C), or None."""
+    classical_caveat: ClassVar[str] = ""
+    """Why its classical reading and its posterior can disagree (for the report's notes)."""
+    card_entries: ClassVar[tuple[str, ...]] = ()
+    """The sensor-card entries that give its first parameter, the first present used
+    (``noise_density``, ``angle_random_walk`` ...; models/README.md)."""
+    long_memory: ClassVar[bool] = False
     """Its increments are correlated at every lag (flicker), not only at the first few."""
+    filtered: ClassVar[bool] = False
+    """Whether the output filter's low-pass shapes its components (the white noise's)."""
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if cls.__dict__.get("parameters"):
+            cls.parameter = cls.parameters[0].name
+
+    @classmethod
+    def components(cls, context: Context) -> tuple:
+        """Its components of the increments' spectrum for a record (:class:`Context`): objects
+        with ``autocovariance``, ``spectrum``, ``block_covariance`` and ``long_memory``
+        (the class itself for a fixed shape). None by default."""
+        return ()
+
+    @classmethod
+    def weights(cls, values: dict, components: tuple):
+        """The weight of each of ``components`` (its own, :meth:`components`) at ``values``:
+        an array (..., len(components)), variance per sample of each shape."""
+        raise NotImplementedError
+
+    @classmethod
+    def increment_spectrum(cls, nu, values: dict, rate_hz: float):
+        """Its part of the two-sided spectrum of the increments at ``nu`` cycles per sample
+        (parameters broadcast against ``nu``): its components' spectra times their weights."""
+        shapes = cls.components(Context(rate_hz))
+        if not shapes:
+            return 0.0 * jnp.asarray(nu)
+        weights = cls.weights(values, shapes)
+        return sum(weights[..., k] * shape.spectrum(nu, rate_hz) for k, shape in enumerate(shapes))
+
+    @classmethod
+    def increment_autocovariance(cls, lags, values: dict, rate_hz: float) -> np.ndarray:
+        """Its part of the increments' autocovariance at integer ``lags`` (numpy; parameters
+        numbers)."""
+        shapes = cls.components(Context(rate_hz))
+        if not shapes:
+            return np.zeros(np.shape(lags))
+        weights = np.asarray(cls.weights(values, shapes))
+        return sum(
+            weights[k] * shape.autocovariance(lags, rate_hz) for k, shape in enumerate(shapes)
+        )
+
+    @classmethod
+    def allan_variance(cls, tau, values: dict, rate_hz: float):
+        """Its Allan variance at averaging times ``tau`` (s), the channel's unit squared;
+        zero for a term without one of its own (a filter shape: :meth:`shaped_allan_variance`
+        of the white noise instead)."""
+        return 0.0 * jnp.asarray(tau, dtype=float)
+
+    @classmethod
+    def level_change_variance(cls, gap_s: float, values: dict, rate_hz: float):
+        """Variance of the change of its level over ``gap_s`` seconds (what separates two
+        static sections of one file): zero for a stationary term."""
+        return 0.0
+
+    @classmethod
+    def allan_exponents(cls, tau, values: dict, rate_hz: float) -> list[tuple[int, object]]:
+        """(alpha, Allan variance) pairs: the power-law exponent alpha of S_y(f) its Allan
+        variance has at each tau (for the equivalent degrees of freedom of a check)."""
+        return []
+
+    @classmethod
+    def sample(cls, keys, n: int, rate_hz: float, values: dict):
+        """Its part of ``n`` samples (added to the others'), drawn from ``keys[i]`` for each
+        stream i it owns; zero by default."""
+        return jnp.zeros(n)
+
+    @classmethod
+    def gain(cls, nu, values: dict, rate_hz: float):
+        """|H|^2 at ``nu`` cycles per sample of a filter shape (:attr:`filter_shape`)."""
+        raise NotImplementedError
+
+    @classmethod
+    def reference_scales(cls, allan) -> dict[str, float]:
+        """The level of each parameter without a fixed prior that the classical Allan curve
+        ``allan`` allows (its upper bound): where its weakly informative prior is centred."""
+        if cls.reading is None:
+            return {}
+        return {cls.parameters[0].name: cls.reading.bound(allan)}
+
+    @classmethod
+    def card_values(cls, section: dict, channel_unit: str) -> dict[str, tuple[float, str]]:
+        """Its first parameter from a sensor card's section (the first of
+        :attr:`card_entries` present), in its unit for a channel in ``channel_unit``, with
+        where in the datasheet it comes from.
+
+        Raises
+        ------
+        ValueError
+            A card unit of another dimension than the parameter's (the message names it).
+        """
+        parameter = cls.parameters[0] if cls.parameters else None
+        for entry in cls.card_entries:
+            if entry in section:
+                item = section[entry]
+                value = cls.card_value(item, parameter.unit_for(channel_unit))
+                return {parameter.name: (value, item["source"])}
+        return {}
+
+    @classmethod
+    def card_value(cls, item: dict, unit: str) -> float:
+        """A card entry's value (``{value, unit, source}``) in ``unit``."""
+        try:
+            return convert(item["value"], item["unit"], unit)
+        except ValueError as error:
+            raise ValueError(
+                f"unit '{item['unit']}' does not give {cls.parameters[0].meaning} "
+                f"{cls.parameters[0].name} ({unit} or a unit of that dimension): {error}"
+            ) from None
 
 
 class RegressionTerm(Effect):

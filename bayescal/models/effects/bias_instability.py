@@ -9,8 +9,9 @@ import numpy as np
 from jax.scipy.special import zeta
 
 from ... import _x64  # noqa: F401  (float64 before any JAX array)
-from ...recording._units import FLICKER_ALLAN_FACTOR
+from ...classical._noise import FLICKER_FLOOR, IEEE952_READINGS
 from ._base import NoiseTerm
+from ._parameter import Parameter
 
 
 def t2_log(t, dtype=float):
@@ -55,17 +56,41 @@ class BiasInstability(NoiseTerm):
     )
     located_by: ClassVar[str] = "allan_deviation"
     band: ClassVar[str] = "low"
-    parameter: ClassVar[str] = "B"
+    aliases: ClassVar[tuple[str, ...]] = ("flicker", "b")
+    parameters: ClassVar[tuple[Parameter, ...]] = (
+        Parameter(
+            "B",
+            "bias instability",
+            time_power=0.0,
+            display={"angular_rate": ("deg/h",), "acceleration": ("µg",)},
+        ),
+    )
+    streams: ClassVar[tuple[int, ...]] = (3,)
+    reading: ClassVar[object] = IEEE952_READINGS["B"]
+    classical_caveat: ClassVar[str] = (
+        "the flat floor of the Allan curve is where white noise meets the slower terms "
+        "(a rate random walk, a ramp), not necessarily bias instability"
+    )
+    card_entries: ClassVar[tuple[str, ...]] = ("bias_instability",)
     long_memory: ClassVar[bool] = True
 
-    @staticmethod
-    def unit(channel_unit: str) -> str:
-        return channel_unit
+    @classmethod
+    def components(cls, context) -> tuple:
+        return (cls,)
 
-    @staticmethod
-    def weight(B):
-        """Weight of the component: B^2."""
-        return B**2
+    @classmethod
+    def weights(cls, values, components):
+        """B^2."""
+        return jnp.asarray(values["B"] ** 2)[..., None]
+
+    @classmethod
+    def card_value(cls, item: dict, unit: str) -> float:
+        """A datasheet's "in-run bias stability" is the minimum of the Allan deviation, so
+        B = that / 0.664 (IEEE Std 952) unless the entry's ``definition`` says otherwise."""
+        value = super().card_value(item, unit)
+        if item.get("definition", "allan_minimum") == "allan_minimum":
+            value /= FLICKER_FLOOR
+        return value
 
     @staticmethod
     def spectrum(nu, rate_hz):
@@ -111,12 +136,27 @@ class BiasInstability(NoiseTerm):
         h = lag_samples
         return float(t2_log(h + 1) - 2 * t2_log(h) + t2_log(h - 1)) / math.pi
 
-    @staticmethod
-    def allan_variance(tau, B):
-        return FLICKER_ALLAN_FACTOR * B**2
+    @classmethod
+    def allan_variance(cls, tau, values, rate_hz):
+        """(2 ln 2 / pi) B^2 (IEEE Std 952, eq. C.9 squared)."""
+        return FLICKER_FLOOR**2 * values["B"] ** 2 + 0.0 * tau
+
+    @classmethod
+    def level_change_variance(cls, gap_s, values, rate_hz):
+        """B^2 times the structure function at the gap (:meth:`structure_function`)."""
+        return values["B"] ** 2 * cls.structure_function(gap_s * rate_hz)
+
+    @classmethod
+    def allan_exponents(cls, tau, values, rate_hz):
+        return [(-1, cls.allan_variance(tau, values, rate_hz))]
+
+    @classmethod
+    def sample(cls, keys, n, rate_hz, values):
+        """B times :meth:`flicker` from its stream."""
+        return values["B"] * cls.flicker(keys[cls.streams[0]], n)
 
     @staticmethod
-    def sample(key, n):
+    def flicker(key, n):
         """Sampled flicker noise with B = 1, starting at zero: the increments are drawn by
         spectral synthesis on a circulant twice the record's length, then summed."""
         size = 1 << max(4, (2 * n - 1).bit_length())

@@ -1,19 +1,59 @@
-"""First-order Gauss-Markov bias: exponentially correlated, with a time constant."""
+"""First-order Gauss-Markov bias: exponentially correlated, with a correlation time."""
 
 import math
 from typing import ClassVar
 
+import jax.numpy as jnp
 import numpy as np
 
+from ... import _x64  # noqa: F401  (float64 before any JAX array)
 from ._base import TIME_CONSTANT_PENALTY, NoiseTerm
+from ._parameter import Parameter
+
+PEAK_DEVIATION = 0.6174
+"""The largest Allan deviation of a Gauss-Markov term per unit sigma, at tau = 1.89 tau_c
+(the maximum of :meth:`GaussMarkov.allan_variance` over tau / tau_c)."""
+
+
+def _one_period(x):
+    """(1 - e^-x) / x, 1 at x = 0 (JAX; numpy inputs welcome)."""
+    x = jnp.asarray(x, dtype=float)
+    safe = jnp.where(x > 0, x, 1.0)
+    return jnp.where(x > 0, -jnp.expm1(-safe) / safe, 1.0)
+
+
+_SERIES_BELOW = 0.05
+"""Below this the closed forms are summed as their Taylor series (they subtract numbers close
+to 1; the series' first neglected term is below 1e-12 of the sum here)."""
+
+
+def _integral_fraction(x):
+    """(x - 1 + e^-x) / x^2: half the variance of the average of a unit-variance
+    Ornstein-Uhlenbeck process over x correlation times."""
+    x = jnp.asarray(x, dtype=float)
+    series = 0.5 - x / 6 + x**2 / 24 - x**3 / 120 + x**4 / 720 - x**5 / 5040 + x**6 / 40320
+    safe = jnp.where(x < _SERIES_BELOW, 1.0, x)
+    return jnp.where(x < _SERIES_BELOW, series, (safe + jnp.expm1(-safe)) / safe**2)
+
+
+def _lag_zero_excess(a):
+    """r(0) - r(1) of :meth:`GaussMarkov.rate_autocovariance`: 2 (a - 1 + e^-a) / a^2 -
+    ((1 - e^-a) / a)^2, its Taylor series for small a."""
+    a = jnp.asarray(a, dtype=float)
+    series = 2 * a / 3 - a**2 / 2 + 7 * a**3 / 30 - a**4 / 12 + 31 * a**5 / 1260 - a**6 / 160
+    safe = jnp.where(a < _SERIES_BELOW, 1.0, a)
+    direct = 2.0 * _integral_fraction(safe) - _one_period(safe) ** 2
+    return jnp.where(a < _SERIES_BELOW, series, direct)
 
 
 class GaussMarkov(NoiseTerm):
-    """An Ornstein-Uhlenbeck bias of variance sigma^2 (sigma in the channel's unit) and
-    correlation time tau_c (``time_constant_s``, s), each sample its average over the sample
-    period: it wanders but returns, a bump in the Allan deviation and a Lorentzian spectrum.
-    The time constant is a nonlinear parameter discovery finds by search; the instance holds
-    it."""
+    """An Ornstein-Uhlenbeck bias of variance sigma^2 (``gm_sigma``, the channel's unit) and
+    correlation time tau_c (``gm_tau``, s), each sample its average over the sample period:
+    it wanders but returns, a bump in the Allan deviation (its peak 0.617 sigma at tau =
+    1.89 tau_c) and a Lorentzian spectrum — the first-order Markov bias of navigation
+    filters (GMWM's staple).
+
+    Discovery fixes tau_c by a search; an instance holds it (``time_constant_s``)."""
 
     name: ClassVar[str] = "gauss_markov"
     explanation: ClassVar[str] = (
@@ -22,13 +62,27 @@ class GaussMarkov(NoiseTerm):
     )
     located_by: ClassVar[str] = "allan_deviation"
     band: ClassVar[str] = "low"
-    parameter: ClassVar[str] = "sigma_gm"
+    aliases: ClassVar[tuple[str, ...]] = ("gm", "markov", "first_order_markov")
+    parameters: ClassVar[tuple[Parameter, ...]] = (
+        Parameter(
+            "gm_sigma",
+            "Gauss-Markov sigma",
+            time_power=0.0,
+            display={"angular_rate": ("deg/h",), "acceleration": ("µg",)},
+        ),
+        # Near flat in log tau_c over the record's range (logistic sd 1.8).
+        Parameter(
+            "gm_tau",
+            "Gauss-Markov correlation time",
+            time_power=None,
+            unit="s",
+            link="log_logit",
+            span="record",
+            prior=(0.0, 1.8),
+        ),
+    )
     long_memory: ClassVar[bool] = True
-    time_constant_s: float
-
-    @staticmethod
-    def unit(channel_unit: str) -> str:
-        return channel_unit
+    time_constant_s: float = 1.0
 
     @property
     def searched(self) -> int:
@@ -47,61 +101,90 @@ class GaussMarkov(NoiseTerm):
 
     def describe(self, finding, posterior, search) -> dict:
         time_constant = search.profile_interval(finding.search)
-        sigma = search.summarize(posterior.draws["sigma_gm"], posterior.units["sigma_gm"])
+        sigma = search.summarize(posterior.draws["gm_sigma"], posterior.units["gm_sigma"])
         return {
-            "sigma_gm": search.widened(
-                sigma, finding.search, "sigma_gm", time_constant, log_scale=True
+            "gm_sigma": search.widened(
+                sigma, finding.search, "gm_sigma", time_constant, log_scale=True
             ),
-            "time_constant": time_constant,
+            "gm_tau": time_constant,
         }
 
+    @classmethod
+    def increment_spectrum(cls, nu, values, rate_hz):
+        """sigma^2 times the increments' spectrum at the correlation time ``gm_tau``, the sum
+        over lags of :meth:`autocovariance` in closed form (its geometric tail beyond lag 1:
+        sum_k>=2 e^(-a (k - 2)) cos(omega k) = Re[e^(-2 i omega) / (1 - e^(-a - i omega))]);
+        traceable in both parameters."""
+        a = 1.0 / (rate_hz * values["gm_tau"])
+        c, x = _one_period(a) ** 2, -jnp.expm1(-a)
+        excess = _lag_zero_excess(a)
+        omega = 2.0 * jnp.pi * jnp.asarray(nu)
+        tail = jnp.real(jnp.exp(-2j * omega) / (1.0 - jnp.exp(-a - 1j * omega)))
+        spectrum = 2.0 * excess + 2.0 * (c * x - excess) * jnp.cos(omega) - 2.0 * c * x * x * tail
+        return values["gm_sigma"] ** 2 * spectrum
+
+    @classmethod
+    def reference_scales(cls, allan) -> dict[str, float]:
+        """The term's peak lies wherever its correlation time puts it, so the curve bounds
+        sigma only by its largest value over the peak's height."""
+        return {"gm_sigma": float(np.nanmax(allan.deviation)) / PEAK_DEVIATION}
+
     def rate_autocovariance(self, lags, rate_hz: float):
-        """Autocovariance of period averages of an Ornstein-Uhlenbeck rate of unit
-        variance."""
+        """Autocovariance of period averages of an Ornstein-Uhlenbeck rate of unit variance:
+        2 (a - 1 + e^-a) / a^2 at lag 0, ((1 - e^-a) / a)^2 e^(-a (k - 1)) at lag k >= 1, a =
+        1 / (fs tau_c) (stable for a correlation time of many records' lengths)."""
         a = 1.0 / (rate_hz * self.time_constant_s)
         lags = np.abs(np.asarray(lags, dtype=float))
-        scale = 1.0 / (a * a)
-        same = 2.0 * scale * (a - 1.0 + math.exp(-a))
-        apart = scale * (-math.expm1(-a)) ** 2 * np.exp(-a * np.maximum(lags - 1.0, 0.0))
-        return np.where(lags == 0, same, apart)
+        apart = float(_one_period(a)) ** 2 * np.exp(-a * np.maximum(lags - 1.0, 0.0))
+        return np.where(lags == 0, 2.0 * float(_integral_fraction(a)), apart)
 
     def autocovariance(self, lags, rate_hz: float):
-        """Increment autocovariance of a unit-variance Gauss-Markov rate."""
-        lags = np.asarray(lags, dtype=float)
-        return (
-            2.0 * self.rate_autocovariance(lags, rate_hz)
-            - self.rate_autocovariance(lags - 1.0, rate_hz)
-            - self.rate_autocovariance(lags + 1.0, rate_hz)
-        )
+        """Increment autocovariance of a unit-variance Gauss-Markov rate, 2 r(k) - r(k - 1) -
+        r(k + 1) of :meth:`rate_autocovariance`, in closed form: 2 (r0 - c), c x - (r0 - c)
+        and -c x^2 e^(-a (k - 2)) at lags 0, 1 and k >= 2, with c = r(1) and x = 1 - e^-a
+        (the differences of near-equal numbers taken out, so that a correlation time far
+        beyond a sample keeps its digits)."""
+        a = 1.0 / (rate_hz * self.time_constant_s)
+        lags = np.abs(np.asarray(lags, dtype=float))
+        c, x = float(_one_period(a)) ** 2, -math.expm1(-a)
+        excess = float(_lag_zero_excess(a))
+        far = -c * x * x * np.exp(-a * np.maximum(lags - 2.0, 0.0))
+        return np.where(lags == 0, 2.0 * excess, np.where(lags == 1, c * x - excess, far))
+
+    def spectrum(self, nu, rate_hz: float):
+        """Two-sided spectrum of the increments of a unit-variance term, per cycle per sample:
+        4 sin^2(pi nu) times the period averages' spectrum r(0) + 2 Re sum_k r(k) e^(-2 pi i nu
+        k), whose geometric tail (r(k) = c e^(-a (k - 1)) beyond lag 0) sums in closed form
+        (:meth:`increment_spectrum`)."""
+        values = {"gm_sigma": 1.0, "gm_tau": self.time_constant_s}
+        return self.increment_spectrum(nu, values, rate_hz)
 
     def block_covariance(self, start, stop, rate_hz: float):
         """Covariance of block means of a unit-variance Gauss-Markov rate (continuous time):
         T^2 (1 - e^{-La/T}) (1 - e^{-Lb/T}) e^{-gap/T} / (La Lb) between blocks, and
         2 T^2 (L/T - 1 + e^{-L/T}) / L^2 for a block with itself."""
         a, b = start / rate_hz, stop / rate_hz
-        length = b - a
         t = self.time_constant_s
-        decay = -np.expm1(-length / t)
+        fraction = (b - a) / t
         before = np.subtract.outer(a, b)  # a_i - b_j
         gap = np.maximum(np.maximum(before, before.T), 0.0)
-        apart = t * t * np.outer(decay, decay) * np.exp(-gap / t) / np.outer(length, length)
-        same = 2 * t * t * (length / t - decay) / length**2
+        scaled = np.asarray(_one_period(fraction))  # (1 - e^(-L/T)) / (L/T)
+        apart = np.outer(scaled, scaled) * np.exp(-gap / t)
+        same = 2.0 * np.asarray(_integral_fraction(fraction))
         return np.where(np.equal.outer(start, start), np.diag(same), apart)
 
-    def allan_variance(self, tau, sigma):
+    @classmethod
+    def allan_variance(cls, tau, values, rate_hz):
         """(2 sigma^2 T / tau) [1 - T / (2 tau) (3 - 4 e^{-tau/T} + e^{-2 tau/T})] (IEEE Std
         952, annex C)."""
-        ratio = np.asarray(tau, dtype=float) / self.time_constant_s
-        return (2 * sigma**2 / ratio) * (
-            1 - (3 - 4 * np.exp(-ratio) + np.exp(-2 * ratio)) / (2 * ratio)
+        ratio = jnp.asarray(tau, dtype=float) / values["gm_tau"]
+        return (2 * values["gm_sigma"] ** 2 / ratio) * (
+            1 - (3 - 4 * jnp.exp(-ratio) + jnp.exp(-2 * ratio)) / (2 * ratio)
         )
 
-    def simulate(self, rng: np.random.Generator, n: int, rate_hz: float, sigma: float):
-        """``n`` samples of a first-order autoregression with the term's variance and
-        correlation time, phi = exp(-1 / (fs tau_c)): the sampled process, which matches the
-        period averages of the model to O(1 / (fs tau_c)) in its variance."""
-        from scipy.signal import lfilter
-
-        phi = math.exp(-1 / (rate_hz * self.time_constant_s))
-        drive = rng.standard_normal(n) * sigma * math.sqrt(1 - phi * phi)
-        return lfilter([1.0], [1.0, -phi], drive)
+    @classmethod
+    def allan_exponents(cls, tau, values, rate_hz):
+        """A random walk below its correlation time, white noise above it."""
+        variance = cls.allan_variance(tau, values, rate_hz)
+        below = jnp.asarray(tau) < values["gm_tau"]
+        return [(-2, jnp.where(below, variance, 0.0)), (0, jnp.where(below, 0.0, variance))]

@@ -8,8 +8,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from ... import _x64  # noqa: F401  (float64 before any JAX array)
-from ...recording._units import integral_unit
+from ...classical._noise import IEEE952_READINGS
 from ._base import NoiseTerm, moving_average
+from ._parameter import Parameter
 
 
 class Quantization(NoiseTerm):
@@ -27,16 +28,22 @@ class Quantization(NoiseTerm):
     )
     located_by: ClassVar[str] = "discrete_levels"
     band: ClassVar[str] = "high"
-    parameter: ClassVar[str] = "Q"
-    long_memory: ClassVar[bool] = False
+    aliases: ClassVar[tuple[str, ...]] = ("q", "white_angle")
+    parameters: ClassVar[tuple[Parameter, ...]] = (
+        Parameter(
+            "Q",
+            "quantization (white angle noise)",
+            time_power=1.0,
+            display={"angular_rate": ("arcsec",), "acceleration": ("m/s",)},
+        ),
+    )
+    streams: ClassVar[tuple[int, ...]] = (4,)
+    reading: ClassVar[object] = IEEE952_READINGS["Q"]
+    classical_caveat: ClassVar[str] = "the -1 stretch of the Allan curve also carries white noise"
     lsb: float = 0.0
     """The grid the samples sit on, when discovery named it from the samples themselves (its
     rounding, LSB^2 / 12 per sample, is then a known white floor of every model); zero for
     the white angle noise Q, the slot term."""
-
-    @staticmethod
-    def unit(channel_unit: str) -> str:
-        return integral_unit(channel_unit)
 
     def describe(self, finding, posterior, search) -> dict:
         """The grid's LSB and what its rounding adds (white, per sample and as a density), or
@@ -57,10 +64,14 @@ class Quantization(NoiseTerm):
     def decided_before_search(self) -> bool:
         return self.lsb > 0  # the grid's step, read from the samples
 
-    @staticmethod
-    def weight(Q):
-        """Weight of the component: Q^2."""
-        return Q**2
+    @classmethod
+    def components(cls, context) -> tuple:
+        return (cls,)
+
+    @classmethod
+    def weights(cls, values, components):
+        """Q^2."""
+        return jnp.asarray(values["Q"] ** 2)[..., None]
 
     @staticmethod
     def spectrum(nu, rate_hz):
@@ -84,14 +95,19 @@ class Quantization(NoiseTerm):
         )
         return rate_hz**2 * shared / np.outer(size, size)
 
-    @staticmethod
-    def allan_variance(tau, Q):
+    @classmethod
+    def allan_variance(cls, tau, values, rate_hz):
         """3 Q^2 / tau^2 (IEEE Std 952, eq. C.2 squared)."""
-        return 3 * Q**2 / tau**2
+        return 3 * values["Q"] ** 2 / tau**2
 
-    @staticmethod
-    def sample(key, n, rate_hz, Q):
+    @classmethod
+    def allan_exponents(cls, tau, values, rate_hz):
+        return [(2, cls.allan_variance(tau, values, rate_hz))]
+
+    @classmethod
+    def sample(cls, keys, n, rate_hz, values):
         """Quantization of the integrated signal: a uniform error of variance Q^2 per sample,
         differenced over each period."""
+        key = keys[cls.streams[0]]
         phase_error = jax.random.uniform(key, (n + 1,), minval=-0.5, maxval=0.5)
-        return Q * math.sqrt(12.0) * jnp.diff(phase_error) / (1.0 / rate_hz)
+        return values["Q"] * math.sqrt(12.0) * jnp.diff(phase_error) / (1.0 / rate_hz)

@@ -8,7 +8,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from ... import _x64  # noqa: F401  (float64 before any JAX array)
+from ...classical._noise import IEEE952_READINGS
 from ._base import NoiseTerm, moving_average
+from ._parameter import Parameter
 
 
 class RateRandomWalk(NoiseTerm):
@@ -22,17 +24,30 @@ class RateRandomWalk(NoiseTerm):
     )
     located_by: ClassVar[str] = "allan_deviation"
     band: ClassVar[str] = "low"
-    parameter: ClassVar[str] = "K"
-    long_memory: ClassVar[bool] = False
+    aliases: ClassVar[tuple[str, ...]] = ("rrw", "k")
+    parameters: ClassVar[tuple[Parameter, ...]] = (
+        Parameter(
+            "K",
+            "rate random walk",
+            time_power=-0.5,
+            display={"angular_rate": ("deg/h/sqrt(h)",), "acceleration": ("µg*sqrt(Hz)",)},
+        ),
+    )
+    streams: ClassVar[tuple[int, ...]] = (1, 2)
+    reading: ClassVar[object] = IEEE952_READINGS["K"]
+    classical_caveat: ClassVar[str] = (
+        "the +1/2 stretch of the Allan curve also carries bias instability and drift"
+    )
+    card_entries: ClassVar[tuple[str, ...]] = ("rate_random_walk",)
 
-    @staticmethod
-    def unit(channel_unit: str) -> str:
-        return f"{channel_unit}*sqrt(Hz)"
+    @classmethod
+    def components(cls, context) -> tuple:
+        return (cls,)
 
-    @staticmethod
-    def weight(K):
-        """Weight of the component: K^2."""
-        return K**2
+    @classmethod
+    def weights(cls, values, components):
+        """K^2."""
+        return jnp.asarray(values["K"] ** 2)[..., None]
 
     @staticmethod
     def spectrum(nu, rate_hz):
@@ -53,16 +68,27 @@ class RateRandomWalk(NoiseTerm):
             same, start[:, None] + size[:, None] / 3.0, earlier_middle
         )
 
-    @staticmethod
-    def allan_variance(tau, K):
+    @classmethod
+    def allan_variance(cls, tau, values, rate_hz):
         """K^2 tau / 3 (IEEE Std 952, eq. C.12 squared)."""
-        return K**2 * tau / 3
+        return values["K"] ** 2 * tau / 3
 
-    @staticmethod
-    def sample(walk_key, bridge_key, n, rate_hz, K):
+    @classmethod
+    def level_change_variance(cls, gap_s, values, rate_hz):
+        """K^2 t: a random walk's change over t."""
+        return values["K"] ** 2 * gap_s
+
+    @classmethod
+    def allan_exponents(cls, tau, values, rate_hz):
+        return [(-2, cls.allan_variance(tau, values, rate_hz))]
+
+    @classmethod
+    def sample(cls, keys, n, rate_hz, values):
         """``n`` period averages of a Brownian path of density K from zero: the average over a
         period is the path at the period's start plus sqrt(period) (z/2 + u/sqrt(12)), with z
         the step and u the Brownian bridge's part."""
+        walk_key, bridge_key = (keys[i] for i in cls.streams)
+        K = values["K"]
         steps = jax.random.normal(walk_key, (n,))
         start = jnp.concatenate((jnp.zeros(1), jnp.cumsum(steps)[:-1]))
         bridge = jax.random.normal(bridge_key, (n,))

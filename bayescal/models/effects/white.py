@@ -9,7 +9,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from ... import _x64  # noqa: F401  (float64 before any JAX array)
+from ...classical._noise import IEEE952_READINGS
 from ._base import NoiseTerm, moving_average
+from ._parameter import Parameter
 
 
 class White(NoiseTerm):
@@ -26,19 +28,41 @@ class White(NoiseTerm):
     )
     located_by: ClassVar[str] = "allan_deviation"
     band: ClassVar[str] = "high"
-    parameter: ClassVar[str] = "N"
-    long_memory: ClassVar[bool] = False
+    aliases: ClassVar[tuple[str, ...]] = ("n", "arw", "vrw")
+    parameters: ClassVar[tuple[Parameter, ...]] = (
+        Parameter(
+            "N",
+            "white noise density",
+            time_power=0.5,
+            display={
+                "angular_rate": ("deg/sqrt(h)",),
+                "acceleration": ("µg/sqrt(Hz)", "m/s/sqrt(h)"),
+            },
+        ),
+    )
+    candidate: ClassVar[bool] = False
+    filtered: ClassVar[bool] = True
+    streams: ClassVar[tuple[int, ...]] = (0,)
+    reading: ClassVar[object] = IEEE952_READINGS["N"]
+    classical_caveat: ClassVar[str] = (
+        "at tau = 1 s the -1/2 line also carries the other terms, which the model separates"
+    )
+    card_entries: ClassVar[tuple[str, ...]] = (
+        "noise_density",
+        "angle_random_walk",
+        "velocity_random_walk",
+    )
 
-    @staticmethod
-    def unit(channel_unit: str) -> str:
-        return f"{channel_unit}/sqrt(Hz)"
+    @classmethod
+    def components(cls, context) -> tuple:
+        return (cls,)
 
-    @staticmethod
-    def weight(N, taps=(1.0, 0.0)):
-        """Weight of the component: N^2 (a^2 + b^2), (a, b) the output filter's taps
-        (:meth:`OutputFilter.taps`; none by default)."""
-        a, b = taps
-        return N**2 * (a * a + b * b)
+    @classmethod
+    def weights(cls, values, components):
+        """N^2 (a^2 + b^2), (a, b) the one-tap output filter's taps
+        (:meth:`OutputFilter.taps`; (1, 0) without one)."""
+        a, b = taps(values.get("F", 0.0))
+        return jnp.asarray(values["N"] ** 2 * (a * a + b * b))[..., None]
 
     @staticmethod
     def spectrum(nu, rate_hz):
@@ -54,14 +78,26 @@ class White(NoiseTerm):
         """Block means of white samples: variance fs / m, independent blocks."""
         return np.diag(rate_hz / (stop - start).astype(float))
 
-    @staticmethod
-    def allan_variance(tau, N):
+    @classmethod
+    def allan_variance(cls, tau, values, rate_hz):
         """N^2 / tau (IEEE Std 952, eq. C.5 squared)."""
-        return N**2 / tau
+        return values["N"] ** 2 / tau
 
-    @staticmethod
-    def sample(key, n, rate_hz, N, F=0.0):
-        """``n`` samples of white noise of density N through the output filter F."""
-        white = jax.random.normal(key, (n + 1,))
+    @classmethod
+    def allan_exponents(cls, tau, values, rate_hz):
+        return [(0, cls.allan_variance(tau, values, rate_hz))]
+
+    @classmethod
+    def sample(cls, keys, n, rate_hz, values):
+        """``n`` samples of white noise of density N through the one-tap output filter F (a
+        low-pass shape is applied by the model, which draws twice the samples for it)."""
+        F = values.get("F", 0.0)
+        white = jax.random.normal(keys[cls.streams[0]], (n + 1,))
         white = (white[1:] + F * white[:-1]) / (1.0 + F)
-        return N * math.sqrt(rate_hz) * white
+        return values["N"] * math.sqrt(rate_hz) * white
+
+
+def taps(F):
+    """The one-tap output filter's taps (a, b) = (1, F) / (1 + F): the samples are
+    a w_k + b w_{k-1} (:class:`~bayescal.models.effects.output_filter.OutputFilter`)."""
+    return 1.0 / (1.0 + F), F / (1.0 + F)

@@ -3,10 +3,13 @@ contrast, of the Student-t interval on the turn-on bias of the same records.
 
     python benchmarks/noise_coverage.py [--simulations 200] [--samples 65536]
     python benchmarks/noise_coverage.py --rate 100 --samples 4096 --truth N=0.004,K=0.005
+    python benchmarks/noise_coverage.py --rate 100 --samples 65536 --simulations 100 \
+        --truth N=0.005,gm_sigma=0.003,gm_tau=20
 
 The second is the record of ``fleet_coverage.py`` (41 s at 100 Hz, white noise and a rate
-random walk, the middle of its ranges). The model is the truth's terms (any registered
-parameters, :data:`bayescal.models._terms.PARAMETERS`).
+random walk, the middle of its ranges); the third a first-order Gauss-Markov bias beside white
+noise (11 minutes at 100 Hz, 33 correlation times). The model is the truth's terms (any
+registered parameters, :data:`bayescal.models._terms.PARAMETERS`).
 
 Target (issue 3): the 90 % intervals of N and K contain the truth 86-94 % of the time over at
 least 200 records. Printed beside each coverage: the sd over the records of the z-score

@@ -172,7 +172,9 @@ def test_term_names():
         "bias_instability",
         "rate_random_walk",
         "rate_ramp",
+        "gauss_markov",
     )
+    assert parse_terms("n,GM") == ("white", "gauss_markov")
     with pytest.raises(bc.InputError, match="add white"):
         parse_terms("output_filter,rrw")
     with pytest.raises(bc.InputError, match="unknown term 'wite'"):

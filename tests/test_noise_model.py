@@ -20,6 +20,7 @@ TERMS = {
     "quantization": dict(Q=2e-4),
     "rate_ramp": dict(R=1e-4),
     "output_filter": dict(N=0.01, F=0.4),
+    "gauss_markov": dict(N=0.01, gm_sigma=5e-3, gm_tau=0.5),
     "all": dict(N=0.01, K=2e-4, B=1e-3, Q=1e-4, R=1e-6, F=0.2),
     "biquad_filter": dict(
         N=0.01, **OutputFilter(shape="biquad", poles=(-0.6, 0.3), zeros=(0.7, 0.5)).values

@@ -21,6 +21,7 @@ from .effects.bias_instability import BiasInstability
 from .effects.biquad_filter import BiquadFilter
 from .effects.butterworth_filter import ButterworthFilter
 from .effects.decimation_filter import DecimationFilter
+from .effects.gauss_markov import GaussMarkov
 from .effects.output_filter import OutputFilter
 from .effects.quantization import Quantization
 from .effects.rate_ramp import RateRamp
@@ -37,9 +38,10 @@ NOISE_TERMS: tuple[type[NoiseTerm], ...] = (
     BiasInstability,
     RateRandomWalk,
     RateRamp,
+    GaussMarkov,
 )
 """Every noise term, in the canonical order (by the slope of its Allan deviation, as IEEE Std
-952's table: -1, -1/2 and the output filter's shapes, 0, +1/2, +1)."""
+952's table: -1, -1/2 and the output filter's shapes, 0, +1/2, +1, then the bump)."""
 
 TERMS = {term.name: term for term in NOISE_TERMS}
 """Every noise term by its name."""

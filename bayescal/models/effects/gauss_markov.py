@@ -3,6 +3,7 @@
 import math
 from typing import ClassVar
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -10,6 +11,9 @@ from ... import _x64  # noqa: F401  (float64 before any JAX array)
 from ._base import TIME_CONSTANT_PENALTY, NoiseTerm
 from ._parameter import Parameter
 
+NODES_PER_DECADE = 8
+"""Correlation times per decade at which the term's shape is computed exactly; between them
+its weights interpolate (cubic, :func:`_interpolation_weights`)."""
 PEAK_DEVIATION = 0.6174
 """The largest Allan deviation of a Gauss-Markov term per unit sigma, at tau = 1.89 tau_c
 (the maximum of :meth:`GaussMarkov.allan_variance` over tau / tau_c)."""
@@ -46,6 +50,23 @@ def _lag_zero_excess(a):
     return jnp.where(a < _SERIES_BELOW, series, direct)
 
 
+def _interpolation_weights(u, count: int):
+    """(..., count): the Catmull-Rom weights of nodes 0..count-1 (node k at u = k - 1) at the
+    fractional node index ``u`` (0 <= u <= count - 3): exact for a cubic in u, and the weights
+    sum to one."""
+    cell = jnp.clip(jnp.floor(u), 0, count - 4)
+    t = u - cell
+    t2, t3 = t * t, t * t * t
+    parts = (
+        (-t3 + 2 * t2 - t) / 2,
+        (3 * t3 - 5 * t2 + 2) / 2,
+        (-3 * t3 + 4 * t2 + t) / 2,
+        (t3 - t2) / 2,
+    )
+    index = jnp.arange(count)
+    return sum(part[..., None] * (index == (cell + k)[..., None]) for k, part in enumerate(parts))
+
+
 class GaussMarkov(NoiseTerm):
     """An Ornstein-Uhlenbeck bias of variance sigma^2 (``gm_sigma``, the channel's unit) and
     correlation time tau_c (``gm_tau``, s), each sample its average over the sample period:
@@ -53,7 +74,13 @@ class GaussMarkov(NoiseTerm):
     1.89 tau_c) and a Lorentzian spectrum — the first-order Markov bias of navigation
     filters (GMWM's staple).
 
-    Discovery fixes tau_c by a search; an instance holds it (``time_constant_s``)."""
+    In the noise model both parameters are sampled: the shape of the increments' spectrum
+    depends on tau_c, so the term's components are its exact shapes at correlation times
+    spaced :data:`NODES_PER_DECADE` per decade from a sample period to the record's length
+    (the range of ``gm_tau``), and its weights interpolate between them in log tau_c: the
+    likelihood keeps exact expected periodograms at the nodes and stays linear in the
+    weights. Discovery fixes tau_c by a search instead; an instance holds it
+    (``time_constant_s``)."""
 
     name: ClassVar[str] = "gauss_markov"
     explanation: ClassVar[str] = (
@@ -81,6 +108,7 @@ class GaussMarkov(NoiseTerm):
             prior=(0.0, 1.8),
         ),
     )
+    streams: ClassVar[tuple[int, ...]] = (5,)
     long_memory: ClassVar[bool] = True
     time_constant_s: float = 1.0
 
@@ -110,6 +138,25 @@ class GaussMarkov(NoiseTerm):
         }
 
     @classmethod
+    def components(cls, context) -> tuple:
+        """Its shape at correlation times from one node below a sample period to one above the
+        record's length, :data:`NODES_PER_DECADE` per decade."""
+        step = math.log(10.0) / NODES_PER_DECADE
+        count = math.ceil(math.log(context.duration_s * context.rate_hz) / step) + 3
+        shortest = 1.0 / context.rate_hz
+        return tuple(cls(shortest * math.exp((k - 1) * step)) for k in range(count))
+
+    @classmethod
+    def weights(cls, values, components):
+        """sigma^2 times the interpolation weights of its nodes at log tau_c."""
+        step = math.log(10.0) / NODES_PER_DECADE
+        shortest = components[1].time_constant_s
+        u = (jnp.log(values["gm_tau"]) - math.log(shortest)) / step
+        return jnp.asarray(values["gm_sigma"] ** 2)[..., None] * _interpolation_weights(
+            u, len(components)
+        )
+
+    @classmethod
     def increment_spectrum(cls, nu, values, rate_hz):
         """sigma^2 times the increments' spectrum at the correlation time ``gm_tau``, the sum
         over lags of :meth:`autocovariance` in closed form (its geometric tail beyond lag 1:
@@ -122,6 +169,12 @@ class GaussMarkov(NoiseTerm):
         tail = jnp.real(jnp.exp(-2j * omega) / (1.0 - jnp.exp(-a - 1j * omega)))
         spectrum = 2.0 * excess + 2.0 * (c * x - excess) * jnp.cos(omega) - 2.0 * c * x * x * tail
         return values["gm_sigma"] ** 2 * spectrum
+
+    @classmethod
+    def increment_autocovariance(cls, lags, values, rate_hz):
+        """sigma^2 times :meth:`autocovariance` at the correlation time ``gm_tau``."""
+        shape = cls(float(values["gm_tau"]))
+        return float(values["gm_sigma"]) ** 2 * shape.autocovariance(lags, rate_hz)
 
     @classmethod
     def reference_scales(cls, allan) -> dict[str, float]:
@@ -183,8 +236,38 @@ class GaussMarkov(NoiseTerm):
         )
 
     @classmethod
+    def level_change_variance(cls, gap_s, values, rate_hz):
+        """2 sigma^2 (1 - e^(-t / tau_c)): a stationary level's change over t."""
+        return 2 * values["gm_sigma"] ** 2 * (-jnp.expm1(-gap_s / values["gm_tau"]))
+
+    @classmethod
     def allan_exponents(cls, tau, values, rate_hz):
         """A random walk below its correlation time, white noise above it."""
         variance = cls.allan_variance(tau, values, rate_hz)
         below = jnp.asarray(tau) < values["gm_tau"]
         return [(-2, jnp.where(below, variance, 0.0)), (0, jnp.where(below, 0.0, variance))]
+
+    @classmethod
+    def sample(cls, keys, n, rate_hz, values):
+        """``n`` period averages of a stationary Ornstein-Uhlenbeck process, exactly: from
+        x_k the pair (x_{k+1}, the integral over the period) is Gaussian with
+        Var x = s^2 (1 - p^2), Var I = 2 s^2 T [d - 2 T (1 - p) + T (1 - p^2) / 2] and
+        Cov = s^2 T (1 - p)^2, p = e^(-d / T), d the sample period (Gillespie 1996)."""
+        sigma, time = values["gm_sigma"], values["gm_tau"]
+        period = 1.0 / rate_hz
+        decay = jnp.exp(-period / time)
+        var_end = 1.0 - decay**2
+        var_integral = 2 * time * (period - 2 * time * (1 - decay) + time * var_end / 2)
+        covariance = time * (1 - decay) ** 2
+        # The integral's part given the end's (Cholesky of the 2 x 2 covariance).
+        along = covariance / jnp.sqrt(var_end)
+        across = jnp.sqrt(jnp.maximum(var_integral - along**2, 0.0))
+        start_key, steps_key = jax.random.split(keys[cls.streams[0]])
+        draws = jax.random.normal(steps_key, (n, 2))
+
+        def step(x, z):
+            integral = x * time * (1 - decay) + along * z[0] + across * z[1]
+            return decay * x + jnp.sqrt(var_end) * z[0], integral / period
+
+        _, averages = jax.lax.scan(step, jax.random.normal(start_key), draws)
+        return sigma * averages

@@ -56,7 +56,7 @@ def _discover(
     args, path, baseline, *, max_effects: int, progress=None, seed: int = 0, posterior=True
 ):
     """Discovery on the channel of one recording, with its temperature and accelerometers."""
-    from ..inference._discovery_search import discover
+    from ..capabilities._discovery import discover
     from ..recording._recording import companions
 
     recording = load(args, path)

@@ -1,0 +1,459 @@
+"""Discovery: find the physics a model of a static channel left out, add it, show the fit
+improve (:func:`discover`; documented for users in docs/guide/discovery.md).
+
+The search itself — the sample-level scans, the fits, the checks, the candidates compared by
+their Bayes factors — is :mod:`bayescal.inference._discovery_search`; the final model's
+posterior is :mod:`bayescal.inference._discovery_posterior`. Here the channel is checked and
+put into the search's data, and what the search found is described for a user: each effect
+named with its parameters, evidence and location (:class:`FoundEffect`), every check before
+and after (:class:`CheckResult`), and what is left unexplained with the advice that follows
+from where it was located (:class:`Discovery`).
+"""
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .._errors import HealthCheckError, InputError
+from ..inference._discovery_fit import DiscoveryData
+from ..inference._discovery_posterior import FinalPosterior, sample_final
+from ..inference._discovery_search import (
+    DECISIVE_LOG_BAYES_FACTOR,
+    HIGH_FREQUENCY_FRACTION,
+    UNMODELLED_CHECKS,
+    Finding,
+    SearchResult,
+    search_effects,
+)
+from ..models.effects._catalogue import CATALOGUE
+from ..models.effects.outliers import Outliers
+from ..models.effects.output_filter import OutputFilter
+from ..models.effects.quantization import Quantization
+from ..models.effects.saturation import Saturation
+
+AMBIGUOUS_LOG_BAYES_FACTOR = math.log(10.0)
+"""A runner-up closer than this to the accepted term explains the mismatch about as well:
+the two are reported as indistinguishable on this recording."""
+
+
+@dataclass(frozen=True)
+class FoundEffect:
+    """An effect discovery named: what it is, its parameters from the final posterior (each
+    ``{mean, sd, q05, q95, unit}``, the 90 % interval), the evidence and where it was
+    located."""
+
+    name: str
+    """The catalogue's name of the effect (``thermal_bias``, ``rate_random_walk``,
+    ``sinusoid``, ``saturation`` ...)."""
+    explanation: str
+    """What it is and what it does to the record, in a sentence for the user."""
+    parameters: dict
+    """parameter -> ``{mean, sd, q05, q95, unit}`` from the final model's posterior."""
+    evidence: dict
+    """log Bayes factor against the model without it (and the threshold), the checks of the
+    baseline it answers, the runner-up and whether it is indistinguishable from it."""
+    location: dict
+    """The baseline check that points to it, with where that check looked."""
+    delta_elpd: float
+    """Gain in expected log predictive density (nats; AIC-penalised)."""
+    delta_elpd_se: float
+    """Its standard error, nats (pointwise over frequency bins and block-mean predictions)."""
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """One check of the baseline model, and of the final one.
+
+    Attributes
+    ----------
+    name : str
+        The check (``allan_deviation``, ``spectrum``, ``spectral_line``, ``residual_vs_time``,
+        ``residual_vs_temperature``, ``tails``, ``rail``, ``levels``, ``time_stamps`` ...).
+    statistic : float
+        Its statistic on the baseline model's residual.
+    p_value : float
+        Its p-value, Bonferroni-corrected over the places it looked.
+    location : dict
+        Where it points (a tau range, a band, a frequency, a time window, a covariate).
+    passed_before, passed_after : bool
+        Whether it passed for the baseline model, and for the final one (p >= 0.01).
+    p_value_after : float or None
+        Its p-value for the final model.
+    """
+
+    name: str
+    statistic: float
+    p_value: float
+    location: dict
+    passed_before: bool
+    passed_after: bool
+    p_value_after: float | None = None
+
+
+@dataclass(frozen=True)
+class Discovery:
+    """What :func:`discover` found: the effects named (``effects``), every check before and
+    after (``checks``), the final model's terms and posterior, and what is left unexplained.
+
+    ``passed`` is whether the final posterior passed its sampler checks (true when no effect
+    was found and none was sampled); :meth:`check` raises when it did not.
+    """
+
+    channel: str
+    """The channel's name."""
+    unit: str
+    """The channel's unit."""
+    rate_hz: float
+    """Sample rate, Hz."""
+    duration_s: float
+    """Length of the record, s."""
+    baseline: tuple[str, ...]
+    """The starting model's terms, the bias first."""
+    effects: tuple[FoundEffect, ...]
+    """The effects named, in the order they were accepted."""
+    checks: tuple[CheckResult, ...]
+    """Every check of the baseline model, with its result for the final one."""
+    final_terms: tuple[str, ...]
+    """The final model's terms: the baseline's and those of the effects named."""
+    unexplained: dict | None
+    """A mismatch left with no decisive term: the failing checks, the best candidate and its
+    log Bayes factor, what to do."""
+    posterior: FinalPosterior | None
+    """The final model's posterior (None when nothing was found)."""
+    result: SearchResult
+    """The fits behind it (for figures and diagnostics)."""
+
+    @property
+    def passed(self) -> bool:
+        """Whether the final posterior passed its sampler checks (True when nothing was
+        found, so nothing was sampled)."""
+        return self.posterior is None or bool(self.posterior.diagnostics.passed)
+
+    def check(self) -> "Discovery":
+        """Raise :class:`~bayescal.HealthCheckError` when the final posterior failed its
+        checks.
+
+        Returns
+        -------
+        Discovery
+            This result, unchanged, when every check passed, so that the call chains
+            (``result = capability(...).check()``).
+
+        Raises
+        ------
+        HealthCheckError
+            A check failed; the message names each.
+        """
+        if not self.passed:
+            raise HealthCheckError(
+                f"discovery on {self.channel}: the final posterior failed its checks: "
+                + "; ".join(self.posterior.diagnostics.failures)
+            )
+        return self
+
+
+def _evidence(finding: Finding, result: SearchResult, failed_before, after) -> tuple[dict, str]:
+    effect = finding.effect
+    evidence = {
+        "log_bayes_factor": finding.log_bayes_factor,
+        "decisive_above": DECISIVE_LOG_BAYES_FACTOR,
+        "baseline_checks_failed": failed_before,
+        "checks_passed_after": [
+            name for name in failed_before if after.get(name, {}).get("passed")
+        ],
+    }
+    explanation = effect.explanation
+    if finding.runner_up:
+        runner, runner_score = finding.runner_up
+        evidence["runner_up"] = {"name": runner, "log_bayes_factor": runner_score}
+        look_alike = CATALOGUE[runner].band == effect.band
+        if look_alike and finding.log_bayes_factor - runner_score < AMBIGUOUS_LOG_BAYES_FACTOR:
+            evidence["indistinguishable_from"] = runner
+            explanation += (
+                f" On this recording it cannot be told from {runner} (log Bayes factor "
+                f"{finding.log_bayes_factor - runner_score:.1f} between them, below log 10): "
+                "both explain the mismatch; a longer recording would decide."
+            )
+    if isinstance(effect, Quantization) and effect.lsb > 0:
+        evidence["log_bayes_factor"] = None  # the samples themselves: no continuous noise
+        evidence["grid"] = {
+            "lsb": effect.lsb,
+            "unit": result.data.unit,
+            "levels": finding.search["levels"],
+            "samples": int(np.count_nonzero(np.isfinite(result.data.values))),
+        }
+    if isinstance(effect, OutputFilter):
+        evidence["shapes"] = finding.search["shapes"]
+    if isinstance(effect, Outliers) and result.outliers:
+        evidence["fraction"] = result.outliers["fraction"]
+        evidence["flagged_samples"] = int(result.outliers["flagged"].sum())
+    if isinstance(effect, Saturation) and result.saturation:
+        evidence["rails"] = {
+            side: {**rail, "unit": result.data.unit}
+            for side, rail in result.saturation["rails"].items()
+        }
+        values = result.data.values
+        evidence["unclipped_mean"] = result.saturation["mean"]
+        evidence["unclipped_sd"] = result.saturation["sd"]
+        evidence["clipped_mean"] = float(np.nanmean(values))
+        evidence["clipped_sd"] = float(np.nanstd(values))
+        evidence["unit"] = result.data.unit
+    return evidence, explanation
+
+
+_ADVICE = {
+    "high": "the mismatch lies toward Nyquist, where the sensor's output filter, its rounding "
+    "and aliasing from a faster internal rate shape the spectrum, and no shape of the "
+    "catalogue explains it decisively — check the part's configured bandwidth and output "
+    "rate; a record with the filter bypassed or at the internal rate tells the shapes apart "
+    "(a longer record does not)",
+    "line": "a line that no single sinusoid explains decisively (one that wanders in "
+    "frequency or several close lines) — a longer record resolves close lines; a vibration "
+    "source nearby shows in every axis",
+    "low": "the recording holds too little evidence to name it — record longer, or with more "
+    "of what the term needs (a wider temperature swing, a start from power-on)",
+}
+"""What to do about a mismatch no term explains, by the band it was located in."""
+
+
+def _located_band(checks: list[dict], failing: list[str], rate_hz: float) -> tuple[str, str]:
+    """The band the failing checks located the mismatch in, and where, in words: a spectral
+    line; high frequency (spectrum bands or Allan deviation only near Nyquist); else low."""
+    located = {check["name"]: check["location"] for check in checks if check["name"] in failing}
+    if "spectral_line" in located:
+        return "line", f"a line at {located['spectral_line']['frequency_hz']:.6g} Hz"
+    high = (
+        [
+            f"{low:.3g}-{top:.3g} Hz"
+            for low, top in [located["spectrum_bands"]["frequency_hz"]]
+            if low >= HIGH_FREQUENCY_FRACTION * rate_hz
+        ]
+        if "spectrum_bands" in located
+        else []
+    )
+    allan = located.get("allan_deviation", {})
+    longest = max(allan.get("tau_range_s", [allan.get("tau_s", 0.0)]))
+    slow = set(located) - {"spectrum_bands", "allan_deviation"}
+    if high and not slow and longest <= 1.0 / (HIGH_FREQUENCY_FRACTION * rate_hz):
+        return "high", f"located at {high[0]}"
+    where = []
+    if "spectrum_bands" in located:
+        low, top = located["spectrum_bands"]["frequency_hz"]
+        where.append(f"spectrum {low:.3g}-{top:.3g} Hz")
+    if allan:
+        where.append(f"Allan deviation at tau = {allan['tau_s']:.3g} s")
+    return "low", ", ".join(where) or "in the slow residual"
+
+
+def _merged(effects: list[FoundEffect]) -> list[FoundEffect]:
+    """One entry per catalogue name: the grid and the white angle noise Q beyond it are both
+    ``quantization``, reported apart within one entry (the grid's LSB and rounding, then Q
+    with the evidence the spectrum gave it)."""
+    merged: dict[str, FoundEffect] = {}
+    for effect in effects:
+        first = merged.get(effect.name)
+        if first is None:
+            merged[effect.name] = effect
+            continue
+        evidence = dict(first.evidence)
+        evidence["white_angle_noise"] = {
+            "log_bayes_factor": effect.evidence["log_bayes_factor"],
+            "decisive_above": effect.evidence["decisive_above"],
+        }
+        merged[effect.name] = replace(
+            first,
+            parameters={**first.parameters, **effect.parameters},
+            evidence=evidence,
+            delta_elpd=first.delta_elpd + effect.delta_elpd,
+            delta_elpd_se=math.hypot(first.delta_elpd_se, effect.delta_elpd_se),
+        )
+    return list(merged.values())
+
+
+def describe(result: SearchResult, posterior: FinalPosterior | None) -> Discovery:
+    """The public result of a search and its final posterior."""
+    after = {check["name"]: check for check in result.final_checks}
+    baseline_checks = {check["name"]: check for check in result.baseline_checks}
+    failed_before = [c["name"] for c in result.baseline_checks if not c["passed"]]
+    effects = []
+    for finding in result.findings:
+        evidence, explanation = _evidence(finding, result, failed_before, after)
+        effects.append(
+            FoundEffect(
+                name=finding.name,
+                explanation=explanation,
+                parameters=finding.effect.describe(finding, posterior, result.context)
+                if posterior or finding.effect.decided_before_search
+                else {},
+                evidence=evidence,
+                location=finding.effect.location(finding, baseline_checks),
+                delta_elpd=finding.delta_elpd,
+                delta_elpd_se=finding.delta_elpd_se,
+            )
+        )
+    effects = _merged(effects)
+    checks = []
+    for check in result.baseline_checks:
+        final = after.get(check["name"]) if result.findings else None
+        checks.append(
+            CheckResult(
+                name=check["name"],
+                statistic=check["statistic"],
+                p_value=check["p_value"],
+                location=check["location"],
+                passed_before=check["passed"],
+                passed_after=final["passed"] if final else check["passed"],
+                p_value_after=final["p_value"] if final else None,
+            )
+        )
+    still_failing = [
+        check["name"]
+        for check in result.final_checks
+        if not check["passed"] and check["name"] not in UNMODELLED_CHECKS
+    ]
+    unexplained = None
+    if still_failing and result.undecided:
+        name, score = result.undecided
+        band, where = _located_band(result.final_checks, still_failing, result.data.rate_hz)
+        unexplained = {
+            "checks": still_failing,
+            "band": band,
+            "where": where,
+            "best_candidate": name,
+            "log_bayes_factor": score,
+            "decisive_above": DECISIVE_LOG_BAYES_FACTOR,
+            "explanation": f"a mismatch remains ({', '.join(still_failing)}; {where}); the "
+            f"term that would explain it best, {name}, is not decisive (log Bayes factor "
+            f"{score:.1f}): {_ADVICE[band]}",
+        }
+    data = result.data
+    # The grid's rounding and the output filter are in every model without being its terms.
+    spec_terms = result.final.spec.terms()
+    return Discovery(
+        channel=data.channel,
+        unit=data.unit,
+        rate_hz=data.rate_hz,
+        duration_s=data.duration_s,
+        baseline=("bias", *result.baseline.spec.noise),
+        effects=tuple(effects),
+        checks=tuple(checks),
+        final_terms=tuple(dict.fromkeys((*spec_terms, *(f.name for f in result.findings)))),
+        unexplained=unexplained,
+        posterior=posterior,
+        result=result,
+    )
+
+
+def discover(
+    y,
+    rate_hz: float | None = None,
+    *,
+    temperature=None,
+    accelerometers: dict | None = None,
+    baseline=("white",),
+    unit: str = "unit",
+    temperature_unit: str = "degC",
+    accelerometer_unit: str | dict = "m/s^2",
+    channel: str = "channel",
+    max_effects: int = 4,
+    posterior: bool = True,
+    seed: int = 0,
+    notes: tuple[str, ...] = (),
+    progress: Callable[[str], None] | None = None,
+) -> Discovery:
+    """Find the physics a model of a static channel left out: locate the mismatch, name the
+    effect of the catalogue that explains it, model it, and show the fit improve.
+
+    Parameters
+    ----------
+    y : array_like or Channel
+        The channel (NaN marks a missing sample); a :class:`~bayescal.Channel` brings its
+        rate, unit and name.
+    rate_hz : float
+        Sample rate, Hz (from the channel when ``y`` is one).
+    temperature : array_like, optional
+        The temperature on the same grid (``temperature_unit``), for a thermal bias.
+    accelerometers : dict of str to array_like, optional
+        Accelerometer channels on the same grid, for a gyro's g-sensitivity; their unit is
+        ``accelerometer_unit`` (one for all, or one per name).
+    baseline : str or tuple of str
+        The noise terms of the starting model besides the bias (white noise always among
+        them): what the recording is expected to hold.
+    unit, channel : str
+        The channel's unit and name, for the parameters and the report.
+    max_effects : int
+        Stop after this many effects.
+    posterior : bool
+        Sample the final model's posterior for the effects' parameters (when an effect was
+        named); without it, the effects come with their evidence but no parameters.
+    seed : int
+        Seed of the final posterior's sampler and of the imputation of clipped samples.
+
+    Returns
+    -------
+    Discovery
+        ``effects`` (each with its name, parameters with 90 % intervals and units, and
+        evidence), ``checks`` before and after, the final terms and posterior.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bayescal as bc
+    >>> rate, n = 50.0, 2**14
+    >>> t = np.arange(n) / rate  # s
+    >>> temperature = 25 + 10 * (1 - np.exp(-t / 100))  # degC, warming up
+    >>> y = bc.NoiseModel(rate_hz=rate, N=0.007).simulate(n, seed=2) + 0.002 * temperature
+    >>> found = bc.discover(y, rate, temperature=temperature, unit="deg/s")
+    >>> [effect.name for effect in found.effects]
+    ['thermal_bias']
+    """
+    if hasattr(y, "values") and hasattr(y, "rate_hz"):
+        if rate_hz is not None and abs(rate_hz / y.rate_hz - 1) > 1e-9:
+            raise InputError(
+                f"rate_hz={rate_hz} but the channel {y.channel} is sampled at {y.rate_hz:g} Hz",
+                fix="leave rate_hz out for a Channel",
+            )
+        rate_hz, unit, channel, notes = y.rate_hz, y.unit, y.channel, (*y.notes, *notes)
+        if temperature is None and y.temperature is not None:
+            temperature = y.temperature
+        y = y.values
+    if rate_hz is None or not rate_hz > 0:
+        raise InputError(f"rate_hz={rate_hz!r} must be a positive sample rate in Hz")
+    baseline = (
+        tuple(part.strip() for part in baseline.split(","))
+        if isinstance(baseline, str)
+        else tuple(baseline)
+    )
+    if max_effects < 1:
+        raise InputError(f"--max-effects {max_effects} must be at least 1")
+    values = np.asarray(y, dtype=float)
+    if temperature is not None:
+        temperature = np.asarray(temperature, dtype=float)
+        finite = temperature[np.isfinite(temperature)]
+        if finite.size == 0 or np.ptp(finite) == 0:
+            temperature = None
+    accelerometers = {
+        name: np.asarray(series, dtype=float) for name, series in (accelerometers or {}).items()
+    }
+    data = DiscoveryData(
+        values=values,
+        rate_hz=float(rate_hz),
+        channel=channel,
+        unit=unit,
+        temperature=temperature,
+        temperature_unit=temperature_unit,
+        covariates=accelerometers,
+        covariate_units=(
+            dict(accelerometer_unit)
+            if isinstance(accelerometer_unit, dict)
+            else dict.fromkeys(accelerometers, accelerometer_unit)
+        ),
+        notes=tuple(notes),
+    )
+    result = search_effects(
+        data, baseline=baseline or ("white",), max_effects=max_effects, progress=progress, seed=seed
+    )
+    final = sample_final(result.final, data, seed=seed) if result.findings and posterior else None
+    return describe(result, final)

@@ -55,7 +55,7 @@ _EXPORTS = {
     "TwoPositionCalibration": "capabilities._two_position",
     "calibrate_multi_position": "capabilities._multi_position",
     "MultiPositionCalibration": "capabilities._multi_position",
-    "fit_thermal": "capabilities._thermal",
+    "fit_thermal": "capabilities._thermal_fit",
     "ThermalCalibration": "capabilities._thermal",
     "load_thermal_calibration": "capabilities._thermal",
     "discover": "capabilities._discovery",

@@ -149,7 +149,7 @@ def run_fit(args) -> int:
     channel, column, temperature_in = _channel(args)
     require_bayesian_run(channel)
     # The analysis's modules load once the input is known to be good.
-    from ..capabilities._thermal import fit_thermal
+    from ..capabilities._thermal_fit import fit_thermal
     from ..report._thermal import thermal_text
 
     calibration = fit_thermal(

@@ -48,6 +48,8 @@ _EXPORTS = {
     # models
     "NoiseModel": "models._noise_model",
     "FleetPopulation": "models._population",
+    # inference
+    "Sampler": "inference._sampler",
     # capabilities
     "fit_noise": "capabilities._noise",
     "NoiseFit": "capabilities._noise",

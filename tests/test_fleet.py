@@ -587,7 +587,7 @@ def _counts_task(tmp_path, **reading):
     path = tmp_path / "logger.csv"
     rows = "\n".join(f"{k / 100:.2f},{131 * v:.3f}" for k, v in enumerate(values))
     path.write_text(f"logger v2.1\nserial 0042\ntime,gyro_x\n{rows}\n")
-    grid = {"unit": "deg/s", "scale": 1 / 131, "rate": None, "gaps": "error"}
+    grid = {"unit": "deg/s", "scale": 1 / 131, "rate_hz": None, "gaps": "error"}
     return RecordingTask(
         row=1,
         path=str(path),
@@ -598,8 +598,7 @@ def _counts_task(tmp_path, **reading):
         terms=("white",),
         sensor=None,
         seed=3,
-        n_walkers=32,
-        max_steps=40_000,
+        sampler=bc.Sampler(),
         reading={"skip_rows": 2, **reading},
     )
 

@@ -184,7 +184,7 @@ def test_each_sample_takes_its_place_on_the_grid_whatever_the_stamps(tmp_path):
     even = np.arange(values.size) / RATE
     jitter = even + 1e-5 * np.random.default_rng(1).standard_normal(values.size)
     given = bc.Recording("given", {"gyro_x": values}, {"gyro_x": "deg/s"}).channel(
-        "gyro_x", rate=RATE
+        "gyro_x", rate_hz=RATE
     )
     for stamps in (even, jitter, 1e6 + even):
         path = tmp_path / "gyro.parquet"

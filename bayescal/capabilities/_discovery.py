@@ -27,6 +27,7 @@ from ..inference._discovery_search import (
     SearchResult,
     search_effects,
 )
+from ..inference._sampler import Sampler, sampler_of
 from ..models.effects._catalogue import CATALOGUE
 from ..models.effects.outliers import Outliers
 from ..models.effects.output_filter import OutputFilter
@@ -360,8 +361,9 @@ def discover(
     max_effects: int = 4,
     posterior: bool = True,
     seed: int = 0,
+    sampler: Sampler = Sampler(),
     notes: tuple[str, ...] = (),
-    progress: Callable[[str], None] | None = None,
+    log: Callable[[str], None] | None = None,
 ) -> Discovery:
     """Find the physics a model of a static channel left out: locate the mismatch, name the
     effect of the catalogue that explains it, model it, and show the fit improve.
@@ -390,6 +392,13 @@ def discover(
         named); without it, the effects come with their evidence but no parameters.
     seed : int
         Seed of the final posterior's sampler and of the imputation of clipped samples.
+    sampler : Sampler
+        How the final posterior is sampled (:class:`~bayescal.Sampler`).
+    notes : tuple of str
+        Notes to carry into the result (a :class:`~bayescal.Channel` brings its own).
+    log : callable, optional
+        Called with a line of text at each stage of the search (the command line prints
+        them).
 
     Returns
     -------
@@ -453,7 +462,12 @@ def discover(
         notes=tuple(notes),
     )
     result = search_effects(
-        data, baseline=baseline or ("white",), max_effects=max_effects, progress=progress, seed=seed
+        data, baseline=baseline or ("white",), max_effects=max_effects, progress=log, seed=seed
     )
-    final = sample_final(result.final, data, seed=seed) if result.findings and posterior else None
+    sampler = sampler_of(sampler)
+    final = (
+        sample_final(result.final, data, seed=seed, sampler=sampler)
+        if result.findings and posterior
+        else None
+    )
     return describe(result, final)

@@ -18,7 +18,7 @@ it (its fit checks, :attr:`~bayescal.NoiseFit.checks`) is left out and reported 
 any other failure (``misfit``).
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 
@@ -36,6 +36,7 @@ from ..inference._population import (
     resolved_parameters,
     spec_probabilities,
 )
+from ..inference._sampler import Sampler, sampler_of
 from ..models._noise_model import parameter_unit
 from ..models._terms import CLASSICAL_TERMS, fleet_terms
 from ..recording._manifest import Manifest, read_manifest
@@ -328,7 +329,7 @@ def fit_fleet(
     seed: int = 0,
     unit: str | None = None,
     scale: float | None = None,
-    rate: float | None = None,
+    rate_hz: float | None = None,
     time_column: str | None = None,
     time_unit: str | None = None,
     gaps: str = "error",
@@ -341,9 +342,7 @@ def fit_fleet(
     channels_axis: int | None = None,
     scheduler=None,
     workers: int | None = None,
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> FleetFit:
     """The population of a fleet of sensors, from each recording's noise posterior.
 
@@ -370,10 +369,10 @@ def fit_fleet(
         parameter's unit for the channel).
     seed : int
         The fleet's seed; each recording's and the population's derive from it.
-    unit, scale, rate, time_column, time_unit, gaps, start, stop
+    unit, scale, rate_hz, time_column, time_unit, gaps, start, stop
         How each recording's channel is put on its grid (:meth:`~bayescal.Recording.channel`;
         ``scale`` turns raw counts into ``unit``); a manifest row's ``rate`` overrides
-        ``rate``.
+        ``rate_hz``.
     skip_rows, names, topic, samples_axis, channels_axis
         How each file is read (:func:`~bayescal.load_recording`): logger lines before a text
         table's header, the names of a headerless table's or an array's columns, a ROS bag's
@@ -384,10 +383,10 @@ def fit_fleet(
         ``LocalCluster`` of ``workers`` processes (default: one per core).
     workers : int, optional
         Worker processes of the local cluster.
-    n_walkers, max_steps : int
-        emcee settings of every posterior (each recording's and the population's).
-    progress : bool
-        A progress bar over the recordings on stderr.
+    sampler : Sampler
+        How every posterior is sampled, each recording's and the population's
+        (:class:`~bayescal.Sampler`); its ``progress`` shows a bar over the recordings and
+        the population's sampling on stderr.
 
     Returns
     -------
@@ -415,6 +414,7 @@ def fit_fleet(
             "a fleet needs at least two recordings", source=manifest.source, fix="add rows"
         )
     terms = fleet_terms(terms)
+    sampler = sampler_of(sampler)
     if isinstance(sensor, str):
         sensor = find_card(sensor)
     requested, card = checked_spec(spec, terms, unit)
@@ -441,18 +441,17 @@ def fit_fleet(
             unit=row.unit,
             run=row.run,
             channel=channel,
-            grid={**grid, "rate": row.rate_hz or rate},
+            grid={**grid, "rate_hz": row.rate_hz or rate_hz},
             terms=terms,
             sensor=sensor,
             seed=_seed(seed, 1, row.row),
-            n_walkers=n_walkers,
-            max_steps=max_steps,
+            sampler=replace(sampler, progress=False),
             temperature_c=row.temperature_c,
             reading=reading,
         )
         for row in manifest.rows
     ]
-    results, sizes, where = run_on_cluster(tasks, scheduler, workers, progress)
+    results, sizes, where = run_on_cluster(tasks, scheduler, workers, sampler.progress)
     fitted = [r for r in results if isinstance(r, RecordingDraws)]
     failed = tuple(r for r in results if isinstance(r, RecordingFailure))
     if len(fitted) < 2:
@@ -469,9 +468,7 @@ def fit_fleet(
         fitted,
         parameters,
         seed=_seed(seed, 0),
-        n_walkers=n_walkers,
-        max_steps=max_steps,
-        progress=progress,
+        sampler=sampler,
     )
     return FleetFit(
         source=manifest.source,

@@ -20,6 +20,7 @@ import numpy as np
 
 from .._errors import BayescalError, InputError
 from ..inference._population import RecordingDraws
+from ..inference._sampler import Sampler
 from ..recording._sensor_cards import SensorCard
 
 CONNECT_TIMEOUT_S = 30
@@ -39,8 +40,8 @@ class RecordingTask:
     terms: tuple[str, ...]
     sensor: SensorCard | None
     seed: int
-    n_walkers: int
-    max_steps: int
+    sampler: Sampler
+    """How the recording's posterior is sampled (no progress bar: the fleet has its own)."""
     temperature_c: float | None = None
     reading: dict = field(default_factory=dict)
     """How the file is read (:func:`~bayescal.load_recording`'s options: ``skip_rows``,
@@ -123,8 +124,7 @@ def fit_recording(task: RecordingTask) -> RecordingDraws | RecordingFailure:
             terms=task.terms,
             sensor=task.sensor,
             seed=task.seed,
-            n_walkers=task.n_walkers,
-            max_steps=task.max_steps,
+            sampler=task.sampler,
         )
     except BayescalError as error:
         kind = "input" if isinstance(error, InputError) else "health"

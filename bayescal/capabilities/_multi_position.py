@@ -22,6 +22,7 @@ from ..classical._multi_position import (
     pose_shortfall,
 )
 from ..inference._multi_position_posterior import BayesianCalibration, bayesian_multi_position
+from ..inference._sampler import Sampler, sampler_of
 from ..recording._sections import MIN_DURATION_S
 
 
@@ -86,7 +87,7 @@ def calibrate_multi_position(
     confidence: float = 0.95,
     bayesian: bool = True,
     seed: int = 0,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> MultiPositionCalibration:
     """Scale, offset and misalignment of a three-axis accelerometer from still poses.
 
@@ -115,6 +116,8 @@ def calibrate_multi_position(
         Also the posterior (else the classical answer only).
     seed : int
         The same inputs and seed give the same posterior.
+    sampler : Sampler
+        How the posterior is sampled (:class:`~bayescal.Sampler`).
 
     Returns
     -------
@@ -146,7 +149,7 @@ def calibrate_multi_position(
         poses, gravity, orientations=orientations, confidence=confidence
     )
     posterior = (
-        bayesian_multi_position(poses, classical, seed=seed, progress=progress)
+        bayesian_multi_position(poses, classical, seed=seed, sampler=sampler_of(sampler))
         if bayesian
         else None
     )

@@ -13,6 +13,7 @@ from ..classical._noise import ClassicalNoise, classical_noise
 from ..inference._checks import noise_model_checker
 from ..inference._noise_posterior import NoisePosterior, sample_noise
 from ..inference._priors import card_prior, default_prior
+from ..inference._sampler import Sampler, sampler_of
 from ..inference._selection import TermSelection, select_noise_terms
 from ..models._level import level_summary
 from ..models._noise_model import parameter_unit
@@ -223,9 +224,7 @@ def noise_posterior(
     level_values: np.ndarray | None = None,
     allan=None,
     seed: int = 0,
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> NoisePosteriorFit:
     """The posterior of the noise model of ``values`` (NaN: a gap), with its terms chosen by
     evidence among the models that fit when ``terms`` is ``"auto"`` and the grid the samples
@@ -246,7 +245,12 @@ def noise_posterior(
         terms = selection.terms
     problem = NoiseProblem(spectral, level, prior_of(terms), lsb=np.asarray(lsb))
     fit = sample_noise(
-        problem, terms=terms, seed=seed, n_walkers=n_walkers, max_steps=max_steps, progress=progress
+        problem,
+        terms=terms,
+        seed=seed,
+        n_walkers=sampler.n_walkers,
+        max_steps=sampler.max_steps,
+        progress=sampler.progress,
     )
     return NoisePosteriorFit(fit, selection, lsb, tuple(checker(fit.model_at_map())))
 
@@ -262,10 +266,8 @@ def fit_noise(
     channel: str = "channel",
     confidence: float = 0.95,
     taus="octave",
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
+    sampler: Sampler = Sampler(),
     sensor_fallback: bool = False,
-    progress: bool = False,
 ) -> NoiseFit:
     """The noise of a static channel: classical numbers and the posterior of the noise model.
 
@@ -296,8 +298,9 @@ def fit_noise(
         Confidence of the classical intervals.
     taus : str, int or array
         Averaging times of the classical Allan deviation (:func:`~bayescal.allan_deviation`).
-    n_walkers, max_steps : int
-        emcee walkers, and the most steps before the convergence check fails.
+    sampler : Sampler
+        How the posterior is sampled (walkers, most steps, a progress bar):
+        :class:`~bayescal.Sampler`.
     sensor_fallback : bool
         When the card says nothing of this kind of channel (or of the fitted terms), use the
         weakly informative prior and say so in ``notes`` instead of raising.
@@ -342,9 +345,7 @@ def fit_noise(
         # The classical Allan deviation at octave taus is the one the checks read: not again.
         allan=classical.allan if isinstance(taus, str) and taus == "octave" else None,
         seed=seed,
-        n_walkers=n_walkers,
-        max_steps=max_steps,
-        progress=progress,
+        sampler=sampler_of(sampler),
     )
     return NoiseFit(
         channel=channel,

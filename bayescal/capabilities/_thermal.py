@@ -32,6 +32,7 @@ import numpy as np
 
 from .._errors import HealthCheckError, InputError
 from .._output import to_jsonable, write_json
+from ..inference._sampler import Sampler, sampler_of
 from ..inference._thermal_posterior import ThermalFit, calibrated_noise_prior, sample_thermal
 from ..models._noise_model import parameter_unit
 from ..models._thermal import ThermalRecord, thermal_problem
@@ -212,7 +213,7 @@ class ThermalCalibration:
         drift: float | str | None = "auto",
         seed: int = 0,
         source: str = "<array>",
-        progress: bool = False,
+        sampler: Sampler = Sampler(),
     ) -> "ThermalCalibration":
         """The calibration updated with alignment data taken in service.
 
@@ -234,6 +235,10 @@ class ThermalCalibration:
             ``"auto"`` learns it, 0 or None assumes no change.
         seed : int
             Seed of the sampler.
+        source : str
+            Where the data come from, for the provenance.
+        sampler : Sampler
+            How the posterior is sampled (:class:`~bayescal.Sampler`).
 
         Returns
         -------
@@ -258,7 +263,9 @@ class ThermalCalibration:
             drift=drift,
             calibrated_range=self.temperature_range,
         )
-        fit = sample_thermal(problem, self.degree, self.reference, seed=seed, progress=progress)
+        fit = sample_thermal(
+            problem, self.degree, self.reference, seed=seed, sampler=sampler_of(sampler)
+        )
         present = temperature[~np.isnan(temperature)]
         low, high = self.temperature_range
         if drift == "auto":

@@ -10,6 +10,7 @@ from .._output import to_jsonable
 from ..classical._allan import allan_deviation
 from ..classical._thermal import classical_thermal
 from ..inference._priors import default_prior
+from ..inference._sampler import Sampler, sampler_of
 from ..inference._thermal_posterior import choose_degree, sample_thermal
 from ..models._terms import AUTO, check_terms, parse_terms
 from ..models._thermal import MAX_DEGREE, ThermalRecord, check_temperature, thermal_problem
@@ -36,7 +37,7 @@ def fit_thermal(
     seed: int = 0,
     source: str = "<array>",
     temperature_name: str = "temperature",
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> ThermalCalibration:
     """Fit a thermal bias calibration of a gyro channel.
 
@@ -66,6 +67,8 @@ def fit_thermal(
         Seed of the sampler: the same inputs and seed give the same calibration.
     source, temperature_name : str
         Where the data come from, for the provenance and the messages.
+    sampler : Sampler
+        How the posterior is sampled (:class:`~bayescal.Sampler`).
 
     Returns
     -------
@@ -123,7 +126,7 @@ def fit_thermal(
         chosen, scores = int(degree), {}
     problem = thermal_problem(record, chosen, reference, noise_prior=noise_prior)
     fit = sample_thermal(
-        problem, chosen, reference, seed=seed, progress=progress, degree_scores=scores
+        problem, chosen, reference, seed=seed, sampler=sampler_of(sampler), degree_scores=scores
     )
     base = ThermalCalibration(
         channel=channel,

@@ -17,6 +17,7 @@ from ..classical._gravity import LocalGravity
 from ..classical._two_position import Section, check_sections, classical_two_position
 from ..inference._noise_posterior import NoisePosterior
 from ..inference._priors import default_prior
+from ..inference._sampler import Sampler, sampler_of
 from ..inference._selection import TermSelection
 from ..models._components import SPECTRAL_COMPONENTS, component_weights
 from ..models._level import bias_given_noise, level_summary
@@ -54,7 +55,7 @@ def bayesian_two_position(
     gap_s: float | None,
     unit: str,
     seed: int,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> BayesianTwoPosition:
     """Joint posterior of scale, offset and g_local; ``gap_s`` is the time between the
     starts of the sections when it is known (one file)."""
@@ -67,7 +68,7 @@ def bayesian_two_position(
         unit=unit,
         level_values=up.values,
         seed=seed,
-        progress=progress,
+        sampler=sampler,
     )
     noise, selection, lsb, checks = fitted.posterior, fitted.selection, fitted.lsb, fitted.checks
     rounding = lsb**2 / (12.0 * rate_hz)
@@ -207,7 +208,7 @@ def calibrate_two_position(
     confidence: float = 0.95,
     bayesian: bool = True,
     seed: int = 0,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> TwoPositionCalibration:
     """Scale factor and offset of one accelerometer axis from a section held up and one held
     down.
@@ -234,6 +235,8 @@ def calibrate_two_position(
         Also the posterior (else the classical answer only).
     seed : int
         The same inputs and seed give the same posterior.
+    sampler : Sampler
+        How the noise posterior is sampled (:class:`~bayescal.Sampler`).
 
     Returns
     -------
@@ -275,7 +278,7 @@ def calibrate_two_position(
             gap_s=gap_s,
             unit=unit,
             seed=seed,
-            progress=progress,
+            sampler=sampler_of(sampler),
         )
         if bayesian
         else None

@@ -25,6 +25,7 @@ from ..models._noise_model import parameter_unit
 from ..models.effects._base import SlotTerm
 from ._discovery_fit import DiscoveryData
 from ._mcmc import batch_log_density, diagnose, sample_ensemble, walker_count
+from ._sampler import Sampler
 
 
 class FinalPosterior(eqx.Module):
@@ -41,7 +42,9 @@ def _active_noise(spec: ModelSpec) -> list[int]:
     return [SLOT_OF[type(effect)] for effect in spec.effects if isinstance(effect, SlotTerm)]
 
 
-def sample_final(fit: ModelFit, data: DiscoveryData, *, seed: int = 0) -> FinalPosterior:
+def sample_final(
+    fit: ModelFit, data: DiscoveryData, *, seed: int = 0, sampler: Sampler = Sampler()
+) -> FinalPosterior:
     """emcee posterior of the final model's noise coordinates (regression integrated out),
     then the regression coefficients from their exact conditional normal. Nonlinear
     parameters found by search (time constants, frequencies) are held at their values."""
@@ -58,15 +61,16 @@ def sample_final(fit: ModelFit, data: DiscoveryData, *, seed: int = 0) -> FinalP
     covariance = np.linalg.pinv(hessian)
     names = [NOISE_SLOTS[i] for i in active]
     log_posterior = batch_log_density(marginal_log_posterior, fit.design)
-    sampler, converged = sample_ensemble(
+    ensemble, converged = sample_ensemble(
         lambda sub: log_posterior(embed(sub)),
         full[active],
         covariance,
         rng,
-        walker_count(len(active)),
-        40_000,
+        walker_count(len(active), sampler.n_walkers),
+        sampler.max_steps,
+        sampler.progress,
     )
-    diagnostics, kept = diagnose(sampler, names, converged, fit.converged)
+    diagnostics, kept = diagnose(ensemble, names, converged, fit.converged)
     theta = embed(kept)
     flat = theta.reshape(-1, theta.shape[-1])
     beta, precision = batch_profile(fit.design, jnp.asarray(flat))

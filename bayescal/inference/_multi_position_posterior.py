@@ -11,8 +11,15 @@ import numpy as np
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from ..classical._multi_position import ClassicalCalibration, Poses
 from ..models._multi_position import MultiPositionProblem, multi_position_problem
-from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
+from ._mcmc import (
+    Diagnostics,
+    batch_log_density,
+    diagnose,
+    sample_ensemble,
+    walker_count,
+)
 from ._optimize import maximum_a_posteriori
+from ._sampler import Sampler
 
 
 @dataclass(frozen=True)
@@ -35,9 +42,7 @@ def bayesian_multi_position(
     classical: ClassicalCalibration,
     *,
     seed: int = 0,
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> BayesianCalibration:
     """Posterior of the calibration parameters, the pose scatter sigma_p (m/s^2) and g_local,
     with its MAP and health checks. The same inputs and ``seed`` give the same result."""
@@ -50,16 +55,16 @@ def bayesian_multi_position(
         MultiPositionProblem.log_posterior, problem, jnp.zeros_like(problem.location)
     )
     best, map_converged, covariance = mode.theta, mode.converged, mode.covariance
-    sampler, converged = sample_ensemble(
+    ensemble, converged = sample_ensemble(
         batch_log_density(MultiPositionProblem.log_posterior, problem),
         np.asarray(best),
         covariance,
         rng,
-        walker_count(len(names), n_walkers),
-        max_steps,
-        progress,
+        walker_count(len(names), sampler.n_walkers),
+        sampler.max_steps,
+        sampler.progress,
     )
-    diagnostics, kept = diagnose(sampler, names, converged, bool(map_converged))
+    diagnostics, kept = diagnose(ensemble, names, converged, bool(map_converged))
     u = np.asarray(problem.location) + np.asarray(problem.step) * kept
     g = gravity.value + gravity.uncertainty * rng.standard_normal(u.shape[:-1])
 

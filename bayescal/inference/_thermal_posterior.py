@@ -26,6 +26,7 @@ from ..models._thermal import (
 )
 from ._mcmc import batch_log_density, diagnose, sample_ensemble, walker_count
 from ._optimize import maximum_a_posteriori
+from ._sampler import Sampler
 
 
 @eqx.filter_jit
@@ -73,8 +74,7 @@ def sample_thermal(
     reference: float,
     *,
     seed: int,
-    max_steps: int = 40_000,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
     degree_scores: dict | None = None,
 ) -> ThermalFit:
     """MAP and Laplace for the noise, emcee posterior, regression draws; checked."""
@@ -82,17 +82,17 @@ def sample_thermal(
     best, converged = mode.theta, mode.converged
     start, covariance = mode.theta, mode.covariance
     rng = np.random.default_rng(seed)
-    sampler, done = sample_ensemble(
+    ensemble, done = sample_ensemble(
         batch_log_density(ThermalProblem.log_posterior, problem),
         start,
         covariance,
         rng,
-        walker_count(start.size),
-        max_steps,
-        progress,
+        walker_count(start.size, sampler.n_walkers),
+        sampler.max_steps,
+        sampler.progress,
     )
     names = problem.parameters
-    diagnostics, kept = diagnose(sampler, names, done, bool(converged))
+    diagnostics, kept = diagnose(ensemble, names, done, bool(converged))
     flat_theta = kept.reshape(-1, kept.shape[-1])
     draws, means, covariances = (
         np.asarray(x)

@@ -65,7 +65,7 @@ def find_pad_window(
     accel_unit: str | None = None,
     time_column: str | None = None,
     time_unit: str | None = None,
-    rate: float | None = None,
+    rate_hz: float | None = None,
 ) -> PadWindow:
     """Locate liftoff and the quiet window before it (seconds from the first sample).
 
@@ -85,7 +85,7 @@ def find_pad_window(
         rest, with a note).
     time_column, time_unit : str, optional
         The time stamps' column and unit (default: ``time`` / ``t`` in seconds).
-    rate : float, optional
+    rate_hz : float, optional
         Sample rate, Hz: take the samples as evenly spaced, ignoring the time stamps.
 
     Returns
@@ -107,7 +107,7 @@ def find_pad_window(
             fix="pass --accel-columns X,Y,Z",
         )
     raw = np.column_stack([table.require(name, "accelerometer column") for name in columns])
-    time, _, notes = seconds_from_start(table, time_column, time_unit, rate, n_rows=raw.shape[0])
+    time, _, notes = seconds_from_start(table, time_column, time_unit, rate_hz, n_rows=raw.shape[0])
     if not np.isfinite(raw).all():
         row = int(np.flatnonzero(~np.isfinite(raw).all(axis=1))[0])
         raise InputError(

@@ -174,20 +174,45 @@ class Recording:
         """
         return name in self.columns or name in self.unusable or name in self.other_columns
 
-    def channel(self, name: str, **options) -> "Channel":
+    def channel(
+        self,
+        name: str,
+        *,
+        unit: str | None = None,
+        scale: float | None = None,
+        rate_hz: float | None = None,
+        time_column: str | None = None,
+        time_unit: str | None = None,
+        start: float | None = None,
+        stop: float | None = None,
+        gaps: str = "error",
+        temperature: str | None = None,
+        at_rest: bool = True,
+    ) -> "Channel":
         """Column ``name`` checked and put on a regular sample grid.
 
         Parameters
         ----------
         name : str
             The column's name.
-        **options
-            Those of ``bayescal.recording.prepare_channel``: ``unit`` (the channel's unit;
-            else the header's, else read from the name), ``scale`` (a factor, or a sensor
-            card's name, for raw counts), ``rate`` (Hz: ignore the time stamps),
-            ``time_column``, ``time_unit``, ``start`` and ``stop`` (seconds from the first
-            sample of the file), ``gaps`` ("error" or "split") and ``temperature`` (a column
-            to put on the same grid).
+        unit : str, optional
+            The channel's unit (else the header's, else read from the name).
+        scale : float, optional
+            A factor the values are multiplied by (raw counts to ``unit``: 1/131 for a gyro
+            giving 131 LSB per deg/s).
+        rate_hz : float, optional
+            Sample rate, Hz: take the samples as evenly spaced, ignoring the time stamps.
+        time_column, time_unit : str, optional
+            The time column (default: ``time`` or ``t``) and its unit (s, ms, us, ns).
+        start, stop : float, optional
+            The window, seconds from the first sample of the file.
+        gaps : "error" or "split"
+            On a gap in the time stamps: refuse, or keep the segments with NaN between them.
+        temperature : str, optional
+            A temperature column to put on the same grid (:attr:`Channel.temperature`).
+        at_rest : bool
+            The sensor is still throughout; False (a calibration session, moved between
+            poses) leaves out the glitch check, which a fast turn of the hand would fail.
 
         Returns
         -------
@@ -205,7 +230,20 @@ class Recording:
         >>> import bayescal as bc
         >>> gyro = bc.load_recording("imu.csv").channel("gyro_x", unit="deg/s")  # doctest: +SKIP
         """
-        return prepare_channel(self, name, **options)
+        return prepare_channel(
+            self,
+            name,
+            unit=unit,
+            scale=scale,
+            rate_hz=rate_hz,
+            time_column=time_column,
+            time_unit=time_unit,
+            start=start,
+            stop=stop,
+            gaps=gaps,
+            temperature=temperature,
+            at_rest=at_rest,
+        )
 
 
 def load_recording(
@@ -936,7 +974,7 @@ def prepare_channel(
     *,
     unit: str | None = None,
     scale: float | None = None,
-    rate: float | None = None,
+    rate_hz: float | None = None,
     time_column: str | None = None,
     time_unit: str | None = None,
     start: float | None = None,
@@ -973,7 +1011,7 @@ def prepare_channel(
         values = values * scale
         notes.append(f"'{channel}' multiplied by {scale:.6g} (--scale): values in {resolved_unit}")
     temperature_values = table.require(temperature, "temperature column") if temperature else None
-    given_rate = rate
+    rate = rate_hz
 
     relative, time_name, time_notes, declared, raw_time = _time_base(
         table, time_column, time_unit, rate, values.size
@@ -1036,7 +1074,7 @@ def prepare_channel(
         notes=tuple(dict.fromkeys(notes)),
         scale=scale,
         grid={
-            "rate": given_rate,
+            "rate_hz": rate_hz,
             "time_column": time_column,
             "time_unit": time_unit,
             "start": start,

@@ -215,7 +215,7 @@ def stream_channel(
     *,
     unit: str | None = None,
     scale: float | None = None,
-    rate: float | None = None,
+    rate_hz: float | None = None,
     time_column: str | None = None,
     time_unit: str | None = None,
     start: float | None = None,
@@ -235,7 +235,7 @@ def stream_channel(
         A Parquet file or a text table (CSV, semicolon, tab or space separated).
     channel : str
         The column to analyse.
-    unit, scale, rate, time_column, time_unit, start, stop, gaps, at_rest
+    unit, scale, rate_hz, time_column, time_unit, start, stop, gaps, at_rest
         As :meth:`Recording.channel <bayescal.Recording.channel>`.
     skip_rows : int
         Lines of a text table to skip before its header.
@@ -255,6 +255,7 @@ def stream_channel(
     InputError
         As :meth:`Recording.channel`, naming the file, column and data row.
     """
+    rate = rate_hz
     path = Path(path)
     source = str(path)
     if not path.is_file():
@@ -298,7 +299,7 @@ def stream_channel(
                 continue
             part = _rows(block, first, last, row + first)
             prepared = prepare_channel(
-                part, channel, rate=rate, gaps=gaps, at_rest=at_rest, **options
+                part, channel, rate_hz=rate, gaps=gaps, at_rest=at_rest, **options
             )
             joiner.add(prepared, float(seconds[first]), float(seconds[last - 1]), row + first + 1)
         if joiner.rate is None:
@@ -330,7 +331,7 @@ def stream_channel(
         notes=tuple(dict.fromkeys(notes)),
         scale=scale,
         grid={
-            "rate": rate,
+            "rate_hz": rate,
             "time_column": time_column,
             "time_unit": time_unit,
             "start": start,

@@ -208,7 +208,7 @@ def test_a_gap_between_blocks_is_refused_by_row_as_in_memory(small_blocks, tmp_p
     write_table(path, values, time)
     with pytest.raises(bc.InputError, match=r"gap of 5\.01 s") as error:
         stream_channel(path, "gyro_x")
-    assert "data row 8193" in str(error.value) and "--gaps split" in error.value.fix
+    assert "data row 8193" in str(error.value) and 'gaps="split"' in error.value.fix
 
 
 def test_the_posterior_of_a_streamed_channel_is_the_in_memory_one(small_blocks, tmp_path):

@@ -33,6 +33,8 @@ from ..models.effects.outliers import Outliers
 from ..models.effects.output_filter import OutputFilter
 from ..models.effects.quantization import Quantization
 from ..models.effects.saturation import Saturation
+from ..recording._inputs import channel_input, check_same_length, samples
+from ..recording._recording import Channel
 
 AMBIGUOUS_LOG_BAYES_FACTOR = math.log(10.0)
 """A runner-up closer than this to the accepted term explains the mismatch about as well:
@@ -125,6 +127,12 @@ class Discovery:
     """The final model's posterior (None when nothing was found)."""
     result: SearchResult
     """The fits behind it (for figures and diagnostics)."""
+
+    @property
+    def summary(self) -> dict:
+        """effect name -> its parameters, each ``{mean, sd, q05, q95, unit}`` (the 90 %
+        interval; empty without a final posterior); empty when nothing was found."""
+        return {effect.name: effect.parameters for effect in self.effects}
 
     @property
     def passed(self) -> bool:
@@ -354,10 +362,10 @@ def discover(
     temperature=None,
     accelerometers: dict | None = None,
     baseline=("white",),
-    unit: str = "unit",
+    unit: str | None = None,
     temperature_unit: str = "degC",
     accelerometer_unit: str | dict = "m/s^2",
-    channel: str = "channel",
+    channel: str | None = None,
     max_effects: int = 4,
     posterior: bool = True,
     seed: int = 0,
@@ -375,16 +383,24 @@ def discover(
         rate, unit and name.
     rate_hz : float
         Sample rate, Hz (from the channel when ``y`` is one).
-    temperature : array_like, optional
-        The temperature on the same grid (``temperature_unit``), for a thermal bias.
-    accelerometers : dict of str to array_like, optional
-        Accelerometer channels on the same grid, for a gyro's g-sensitivity; their unit is
-        ``accelerometer_unit`` (one for all, or one per name).
+    temperature : array_like or Channel, optional
+        The temperature on the same grid, one value per sample of ``y``, for a thermal bias
+        (default: the temperature a Channel was prepared with, if any).
+    accelerometers : dict of str to array_like or Channel, optional
+        Accelerometer channels on the same grid, for a gyro's g-sensitivity.
     baseline : str or tuple of str
         The noise terms of the starting model besides the bias (white noise always among
         them): what the recording is expected to hold.
-    unit, channel : str
-        The channel's unit and name, for the parameters and the report.
+    unit : str, optional
+        The channel's unit, for the parameters and the report (a Channel's own, else
+        ``"unit"``).
+    temperature_unit : str
+        The temperature's unit.
+    accelerometer_unit : str or dict of str to str
+        The accelerometers' unit, one for all (a Channel's own where it is one) or one per
+        name.
+    channel : str, optional
+        The channel's name (a Channel's own, else ``"channel"``).
     max_effects : int
         Stop after this many effects.
     posterior : bool
@@ -406,6 +422,12 @@ def discover(
         ``effects`` (each with its name, parameters with 90 % intervals and units, and
         evidence), ``checks`` before and after, the final terms and posterior.
 
+    Raises
+    ------
+    InputError
+        Too few samples, a rate or unit that disagrees with a Channel's, a temperature or
+        accelerometer series of another length than ``y``, an unknown baseline term.
+
     Examples
     --------
     >>> import numpy as np
@@ -418,56 +440,61 @@ def discover(
     >>> [effect.name for effect in found.effects]
     ['thermal_bias']
     """
-    if hasattr(y, "values") and hasattr(y, "rate_hz"):
-        if rate_hz is not None and abs(rate_hz / y.rate_hz - 1) > 1e-9:
-            raise InputError(
-                f"rate_hz={rate_hz} but the channel {y.channel} is sampled at {y.rate_hz:g} Hz",
-                fix="leave rate_hz out for a Channel",
-            )
-        rate_hz, unit, channel, notes = y.rate_hz, y.unit, y.channel, (*y.notes, *notes)
-        if temperature is None and y.temperature is not None:
-            temperature = y.temperature
-        y = y.values
-    if rate_hz is None or not rate_hz > 0:
-        raise InputError(f"rate_hz={rate_hz!r} must be a positive sample rate in Hz")
+    sampler = sampler_of(sampler)
+    given = channel_input(y, rate_hz, unit=unit, channel=channel)
+    if temperature is None:
+        temperature = given.temperature
     baseline = (
         tuple(part.strip() for part in baseline.split(","))
         if isinstance(baseline, str)
         else tuple(baseline)
     )
     if max_effects < 1:
-        raise InputError(f"--max-effects {max_effects} must be at least 1")
-    values = np.asarray(y, dtype=float)
-    if temperature is not None:
-        temperature = np.asarray(temperature, dtype=float)
-        finite = temperature[np.isfinite(temperature)]
-        if finite.size == 0 or np.ptp(finite) == 0:
-            temperature = None
-    accelerometers = {
-        name: np.asarray(series, dtype=float) for name, series in (accelerometers or {}).items()
-    }
+        raise InputError(f"max_effects={max_effects} must be at least 1")
+    covariates = {name: samples(series, name) for name, series in (accelerometers or {}).items()}
+    check_same_length(
+        ("y", given.values),
+        ("temperature", None if temperature is None else samples(temperature, "temperature")),
+        *((f"accelerometers[{name!r}]", series) for name, series in covariates.items()),
+    )
     data = DiscoveryData(
-        values=values,
-        rate_hz=float(rate_hz),
-        channel=channel,
-        unit=unit,
-        temperature=temperature,
+        values=given.values,
+        rate_hz=given.rate_hz,
+        channel=given.channel,
+        unit=given.unit,
+        temperature=_varying(temperature),
         temperature_unit=temperature_unit,
-        covariates=accelerometers,
-        covariate_units=(
-            dict(accelerometer_unit)
-            if isinstance(accelerometer_unit, dict)
-            else dict.fromkeys(accelerometers, accelerometer_unit)
-        ),
-        notes=tuple(notes),
+        covariates=covariates,
+        covariate_units=_accelerometer_units(accelerometers or {}, accelerometer_unit),
+        notes=(*given.notes, *notes),
     )
     result = search_effects(
         data, baseline=baseline or ("white",), max_effects=max_effects, progress=log, seed=seed
     )
-    sampler = sampler_of(sampler)
     final = (
         sample_final(result.final, data, seed=seed, sampler=sampler)
         if result.findings and posterior
         else None
     )
     return describe(result, final)
+
+
+def _varying(temperature) -> np.ndarray | None:
+    """The temperature as samples, or None where it is absent or never changes (no thermal
+    term can be fitted to it)."""
+    if temperature is None:
+        return None
+    values = samples(temperature, "temperature")
+    finite = values[np.isfinite(values)]
+    return None if finite.size == 0 or np.ptp(finite) == 0 else values
+
+
+def _accelerometer_units(accelerometers: dict, given: str | dict) -> dict:
+    """name -> unit of each accelerometer series: ``given`` (one for all, or per name), a
+    Channel's own where one unit is given for all."""
+    if isinstance(given, dict):
+        return dict(given)
+    return {
+        name: series.unit if isinstance(series, Channel) else given
+        for name, series in accelerometers.items()
+    }

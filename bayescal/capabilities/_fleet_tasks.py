@@ -196,9 +196,9 @@ def client_of(scheduler, workers: int | None):
         return Client(cluster), cluster, "local"
     if workers is not None:
         raise InputError(
-            "--workers sets the size of a local cluster; with --scheduler the cluster's own "
+            "workers= sets the size of a local cluster; with scheduler= the cluster's own "
             "workers run the tasks",
-            fix="leave --workers out",
+            fix="leave workers= out",
         )
     if isinstance(scheduler, Client):
         return scheduler, None, "client"
@@ -206,7 +206,7 @@ def client_of(scheduler, workers: int | None):
         client = Client(str(scheduler), timeout=CONNECT_TIMEOUT_S)
     except (OSError, TimeoutError, ValueError) as error:
         raise InputError(
-            f"--scheduler {scheduler}: cannot connect ({error})",
+            f"scheduler={str(scheduler)!r}: cannot connect ({error})",
             fix="give the address of a running Dask scheduler, e.g. tcp://host:8786",
         ) from None
     return client, None, "remote"
@@ -218,14 +218,14 @@ def check_workers(client, address: str) -> int:
         client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
     except TimeoutError:
         raise InputError(
-            f"--scheduler {address}: no worker joined within {CONNECT_TIMEOUT_S} s",
+            f"scheduler={address!r}: no worker joined within {CONNECT_TIMEOUT_S} s",
             fix="start workers (dask worker ADDRESS)",
         ) from None
     try:
         versions = client.run(worker_version)
     except Exception as error:  # an unpicklable function: bayescal missing on a worker
         raise InputError(
-            f"--scheduler {address}: the workers cannot run bayescal ({type(error).__name__}: "
+            f"scheduler={address!r}: the workers cannot run bayescal ({type(error).__name__}: "
             f"{error})",
             fix="install the same bayescal on every worker",
         ) from None
@@ -233,7 +233,7 @@ def check_workers(client, address: str) -> int:
     other = {worker: v for worker, v in versions.items() if v != mine}
     if other:
         raise InputError(
-            f"--scheduler {address}: workers run bayescal {sorted(set(other.values()))}, "
+            f"scheduler={address!r}: workers run bayescal {sorted(set(other.values()))}, "
             f"this client {mine}",
             fix="install the same bayescal on every worker",
         )

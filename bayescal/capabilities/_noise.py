@@ -20,6 +20,7 @@ from ..models._noise_model import parameter_unit
 from ..models._noise_problem import NoiseProblem
 from ..models._terms import AUTO, CANDIDATE_TERMS, DEFAULT_TERMS, check_terms, parse_terms
 from ..models._whittle import spectral_summary
+from ..recording._inputs import channel_input
 from ..recording._levels import discrete_step
 from ..recording._sensor_cards import SensorCard, find_card
 
@@ -157,28 +158,6 @@ class NoiseFit:
         return self
 
 
-def _as_channel(y, rate_hz, unit, channel):
-    """(values, rate, unit, channel name, source, notes) from an array or a Channel."""
-    if hasattr(y, "values") and hasattr(y, "rate_hz"):
-        if rate_hz is not None and abs(rate_hz / y.rate_hz - 1) > 1e-9:
-            raise InputError(
-                f"rate_hz={rate_hz} but the channel {y.channel} is sampled at {y.rate_hz:g} Hz",
-                fix="leave rate_hz out for a Channel",
-            )
-        if unit is not None and unit != y.unit:
-            raise InputError(
-                f"unit={unit!r} but the channel {y.channel} is in {y.unit}",
-                fix="leave unit out for a Channel, or prepare it with that unit",
-            )
-        return y.values, y.rate_hz, y.unit, y.channel, y.source, y.notes
-    if rate_hz is None or not rate_hz > 0:
-        raise InputError(f"rate_hz={rate_hz!r} must be a positive sample rate in Hz")
-    values = np.asarray(y, dtype=float)
-    if values.ndim != 1:
-        raise InputError(f"y: one channel, a 1-D array (shape {values.shape})")
-    return values, float(rate_hz), unit or "unit", channel, "<array>", ()
-
-
 def noise_priors(
     terms, classical: ClassicalNoise, unit: str, sensor: SensorCard | str | None, fallback: bool
 ) -> tuple[Callable, tuple[str, ...]]:
@@ -263,7 +242,7 @@ def fit_noise(
     sensor: str | SensorCard | None = None,
     seed: int = 0,
     unit: str | None = None,
-    channel: str = "channel",
+    channel: str | None = None,
     confidence: float = 0.95,
     taus="octave",
     sampler: Sampler = Sampler(),
@@ -293,7 +272,10 @@ def fit_noise(
         The same inputs and seed give the same posterior.
     unit : str, optional
         The channel's unit (deg/s, m/s^2 ...); parameters are reported in units derived from
-        it (IEEE Std 952: N in unit/√Hz, B in unit, K in unit·√Hz ...).
+        it (IEEE Std 952: N in unit/√Hz, B in unit, K in unit·√Hz ...). A Channel brings
+        its own.
+    channel : str, optional
+        The channel's name, for the result (a Channel's own, else ``"channel"``).
     confidence : float
         Confidence of the classical intervals.
     taus : str, int or array
@@ -326,14 +308,15 @@ def fit_noise(
     >>> fit.summary["N"]["unit"]
     'deg/s/sqrt(Hz)'
     """
-    values, rate_hz, unit, channel, source, notes = _as_channel(y, rate_hz, unit, channel)
+    data = channel_input(y, rate_hz, unit=unit, channel=channel)
+    values, rate_hz, unit, channel = data.values, data.rate_hz, data.unit, data.channel
     terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
     try:
         classical = classical_noise(values, rate_hz, confidence=confidence, taus=taus)
     except InputError as error:
-        if source == "<array>":
+        if data.source == "<array>":
             raise
-        raise InputError(error.problem, source=source, column=channel, fix=error.fix) from None
+        raise InputError(error.problem, source=data.source, column=channel, fix=error.fix) from None
     family = ("white", *CANDIDATE_TERMS) if terms == AUTO else terms
     prior_of, prior_notes = noise_priors(family, classical, unit, sensor, sensor_fallback)
     posterior = noise_posterior(
@@ -356,6 +339,6 @@ def fit_noise(
         checks=posterior.checks,
         selection=posterior.selection,
         lsb=posterior.lsb,
-        source=source,
-        notes=(*notes, *prior_notes),
+        source=data.source,
+        notes=(*data.notes, *prior_notes),
     )

@@ -23,7 +23,6 @@ A calibration is made by :func:`~bayescal.fit_thermal` (:mod:`._thermal_fit`); i
 """
 
 import datetime
-import json
 from dataclasses import dataclass, field, replace
 from importlib.metadata import version
 from pathlib import Path
@@ -36,7 +35,14 @@ from ..inference._sampler import Sampler, sampler_of
 from ..inference._thermal_posterior import ThermalFit, calibrated_noise_prior, sample_thermal
 from ..models._noise_model import parameter_unit
 from ..models._thermal import ThermalRecord, thermal_problem
-from ._thermal_file import SCHEMA, SCHEMA_VERSION, check_document
+from ..recording._inputs import (
+    channel_and_temperature,
+    check_same_length,
+    samples,
+    temperature_of,
+)
+from ..recording._recording import Channel
+from ._thermal_file import document_of, fields_of, read_document
 
 
 def _coefficient_units(unit: str, temperature_unit: str, degree: int) -> list[str]:
@@ -110,6 +116,31 @@ class ThermalCalibration:
         return _coefficient_units(self.unit, self.temperature_unit, self.degree)
 
     @property
+    def summary(self) -> dict:
+        """``c0`` .. ``cd`` -> ``{mean, sd, q05, q95, unit}`` (the posterior mean and sd, and
+        the 90 % interval of its draws: None for a calibration that does not carry them),
+        then each noise parameter -> ``{mean, q05, q95, unit}`` and, after an update,
+        ``drift`` as the update used or learned it."""
+        low = self.bayesian.get("coefficient_q05")
+        high = self.bayesian.get("coefficient_q95")
+        summary = {
+            f"c{j}": {
+                "mean": float(self.coefficients[j]),
+                "sd": float(np.sqrt(self.covariance[j, j])),
+                "q05": None if low is None else float(low[j]),
+                "q95": None if high is None else float(high[j]),
+                "unit": unit,
+            }
+            for j, unit in enumerate(self.coefficient_units)
+        }
+        for name, entry in self.noise.items():
+            if name != "terms":
+                summary[name] = {key: entry.get(key) for key in ("mean", "q05", "q95", "unit")}
+        if self.drift is not None:
+            summary["drift"] = dict(self.drift)
+        return summary
+
+    @property
     def passed(self) -> bool:
         """Whether the posterior behind it passed its sampler checks (False for a calibration
         that carries no record of them)."""
@@ -181,50 +212,74 @@ class ThermalCalibration:
         temperature = np.asarray(temperature, dtype=float)
         return (temperature < low) | (temperature > high)
 
-    def compensate(self, y, temperature) -> tuple[np.ndarray, np.ndarray]:
+    def compensate(self, y, temperature=None) -> tuple[np.ndarray, np.ndarray]:
         """The channel ``y`` less its thermal bias (and the Earth rate, when the calibration
         took it off), with the bias's posterior sd per sample.
 
         Parameters
         ----------
-        y : array_like
+        y : array_like or Channel
             The channel's samples, the calibration's unit.
-        temperature : array_like
-            The temperature at each sample, ``temperature_unit``.
+        temperature : array_like or float, optional
+            The temperature at each sample (or one for all), ``temperature_unit``; default:
+            the temperature a Channel was prepared with.
 
         Returns
         -------
         compensated, sd : numpy.ndarray
             The compensated samples and the sd of the bias taken off each, the channel's
             unit.
+
+        Raises
+        ------
+        InputError
+            A Channel in another unit, no temperature, a temperature series of another
+            length than ``y``.
         """
+        self._check_unit(y)
+        values = samples(y, "y")
+        temperature = temperature_of(y, temperature)
+        if temperature.ndim:
+            check_same_length(("y", values), ("temperature", temperature))
         bias, sd = self.bias(temperature)
         earth = self.earth_rate["value"] if self.earth_rate else 0.0
-        return np.asarray(y, dtype=float) - bias - earth, sd
+        return values - bias - earth, sd
+
+    def _check_unit(self, y) -> None:
+        """A Channel given to this calibration must be in its unit."""
+        if isinstance(y, Channel) and y.unit != self.unit:
+            raise InputError(
+                f"the calibration is in {self.unit} but the channel {y.channel} is in {y.unit}",
+                fix=f"prepare the channel in {self.unit} (Recording.channel(name, "
+                f"unit={self.unit!r}))",
+            )
 
     def update(
         self,
         y,
-        temperature,
-        rate_hz: float,
+        temperature=None,
+        rate_hz: float | None = None,
         *,
         periods: tuple[tuple[int, int], ...] | None = None,
         offsets: list | None = None,
         drift: float | str | None = "auto",
         seed: int = 0,
-        source: str = "<array>",
+        source: str | None = None,
         sampler: Sampler = Sampler(),
     ) -> "ThermalCalibration":
         """The calibration updated with alignment data taken in service.
 
         Parameters
         ----------
-        y, temperature : array_like
-            The channel (its unit) and its temperature, on one sample grid; NaN marks a
-            missing sample. The Earth rate this calibration took off (if any) is taken off
-            ``y`` too.
+        y : array_like or Channel
+            The channel (its unit); NaN marks a missing sample. The Earth rate this
+            calibration took off (if any) is taken off ``y`` too. A
+            :class:`~bayescal.Channel` brings its rate, source and the temperature it was
+            prepared with.
+        temperature : array_like or Channel, optional
+            Its temperature, one value per sample (default: the Channel's).
         rate_hz : float
-            Sample rate, Hz.
+            Sample rate, Hz (from the channel when ``y`` is one).
         periods : tuple of (start, stop), optional
             Sample ranges of the alignment periods (default: the gap-free runs of ``y``).
         offsets : list of (value, uncertainty) or None, optional
@@ -235,8 +290,9 @@ class ThermalCalibration:
             ``"auto"`` learns it, 0 or None assumes no change.
         seed : int
             Seed of the sampler.
-        source : str
-            Where the data come from, for the provenance.
+        source : str, optional
+            Where the data come from, for the provenance (a Channel's own, else
+            ``<array>``).
         sampler : Sampler
             How the posterior is sampled (:class:`~bayescal.Sampler`).
 
@@ -244,9 +300,17 @@ class ThermalCalibration:
         -------
         ThermalCalibration
             The new calibration; its provenance continues this one's.
+
+        Raises
+        ------
+        InputError
+            A Channel in another unit, no temperature, a temperature series of another
+            length than ``y``.
         """
-        values = np.asarray(y, dtype=float)
-        temperature = np.asarray(temperature, dtype=float)
+        self._check_unit(y)
+        gyro, temperature = channel_and_temperature(y, temperature, rate_hz, unit=None)
+        values, rate_hz = np.asarray(gyro.values, dtype=float), gyro.rate_hz
+        source = source or gyro.source
         if self.earth_rate:
             values = values - self.earth_rate["value"]
         periods = periods or gap_free_runs(values)
@@ -313,27 +377,7 @@ class ThermalCalibration:
             covered, the noise model, the Earth rate taken off, the provenance of every step;
             arrays as NumPy arrays, written as lists.
         """
-        document = {
-            "schema": SCHEMA,
-            "schema_version": SCHEMA_VERSION,
-            "channel": self.channel,
-            "unit": self.unit,
-            "temperature_unit": self.temperature_unit,
-            "reference_temperature": self.reference,
-            "degree": self.degree,
-            "coefficients": self.coefficients,
-            "coefficient_units": self.coefficient_units,
-            "covariance": self.covariance,
-            "temperature_range": list(self.temperature_range),
-            "noise": self.noise,
-            "earth_rate": self.earth_rate,
-            "provenance": list(self.provenance),
-            "bayesian": self.bayesian,
-        }
-        for key in ("classical", "offsets", "drift"):
-            if getattr(self, key) is not None:
-                document[key] = getattr(self, key)
-        return to_jsonable(document)
+        return document_of(self)
 
     def save(self, path) -> Path:
         """Write the calibration file (atomically: a failure leaves no partial file).
@@ -378,24 +422,7 @@ class ThermalCalibration:
             schema or schema version; a covariance that is not symmetric positive
             semi-definite.
         """
-        check_document(document, source)
-        return cls(
-            channel=document["channel"],
-            unit=document["unit"],
-            temperature_unit=document["temperature_unit"],
-            reference=float(document["reference_temperature"]),
-            degree=int(document["degree"]),
-            coefficients=np.asarray(document["coefficients"], dtype=float),
-            covariance=np.asarray(document["covariance"], dtype=float),
-            temperature_range=tuple(float(t) for t in document["temperature_range"]),
-            noise=document["noise"],
-            earth_rate=document.get("earth_rate"),
-            provenance=tuple(document["provenance"]),
-            bayesian=document.get("bayesian") or {},
-            classical=document.get("classical"),
-            offsets=document.get("offsets"),
-            drift=document.get("drift"),
-        )
+        return cls(**fields_of(document, source))
 
 
 def gap_free_runs(values: np.ndarray, minimum: int = 16) -> tuple[tuple[int, int], ...]:
@@ -473,28 +500,7 @@ def load_thermal_calibration(
         another channel, unit or temperature unit.
     """
     source = str(path)
-    try:
-        document = json.loads(Path(path).read_text(encoding="utf-8-sig"))
-    except FileNotFoundError:
-        raise InputError("no such calibration file", source=source, fix="check the path") from None
-    except IsADirectoryError:
-        raise InputError(
-            "is a folder, not a calibration file", source=source, fix="check the path"
-        ) from None
-    except PermissionError:
-        raise InputError("cannot be read (permission denied)", source=source) from None
-    except UnicodeDecodeError:
-        raise InputError(
-            "not a JSON calibration file (it is not text)",
-            source=source,
-            fix="give a file written by bayescal thermal fit",
-        ) from None
-    except json.JSONDecodeError as error:
-        raise InputError(
-            f"not a JSON calibration file: {error}",
-            source=source,
-            fix="give a file written by bayescal thermal fit",
-        ) from None
+    document = read_document(path)
     calibration = replace(ThermalCalibration.from_document(document, source), origin=source)
     if channel is not None and calibration.channel != channel:
         raise InputError(
@@ -507,7 +513,7 @@ def load_thermal_calibration(
         raise InputError(
             f"the calibration is in {calibration.unit} but the channel is in {unit}",
             source=source,
-            fix="pass --unit to match, or refit in this unit",
+            fix="prepare the channel in its unit, or refit in this unit",
         )
     if temperature_unit is not None and calibration.temperature_unit != temperature_unit:
         raise InputError(

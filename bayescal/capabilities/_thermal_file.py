@@ -1,14 +1,19 @@
-"""The schema of a thermal calibration file (JSON, ``schema: bayescal.thermal_calibration``,
-``schema_version: 1``; :mod:`._thermal` describes its fields), checked field by field before
-a calibration is made of it: finite numbers, sizes that match the degree, a symmetric positive
-semi-definite covariance, a temperature unit. A field that fails raises
-:class:`~bayescal.InputError` naming it and the file."""
+"""A thermal calibration's file (JSON, ``schema: bayescal.thermal_calibration``,
+``schema_version: 1``; :mod:`._thermal` describes its fields): its layout
+(:func:`document_of`, :func:`fields_of`), its reading (:func:`read_document`) and its schema,
+checked field by field before a calibration is made of it (:func:`check_document`: finite
+numbers, sizes that match the degree, a symmetric positive semi-definite covariance, a
+temperature unit). A field that fails raises :class:`~bayescal.InputError` naming it and the
+file; a missing file, one that is also a :class:`FileNotFoundError`."""
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 
-from .._errors import InputError
+from .._errors import InputError, MissingFileError
+from .._output import to_jsonable
 from ..models._thermal import MAX_DEGREE
 from ..recording._units import parse_unit
 
@@ -84,7 +89,10 @@ def _check_noise(noise, source: str) -> None:
 
 
 def check_document(document, source: str) -> None:
-    """The schema of a calibration file, field by field (see the module's docstring)."""
+    """The schema of a calibration file, field by field (see the module's docstring).
+
+    About 80 lines: one check per field, in the order of the module's docstring.
+    """
     if not isinstance(document, dict):
         kind = {list: "a list", type(None): "null", str: "a string", bool: "a boolean"}.get(
             type(document), "a number"
@@ -165,3 +173,80 @@ def check_document(document, source: str) -> None:
     for name in ("bayesian", "classical", "offsets", "drift"):
         if document.get(name) is not None and not isinstance(document[name], dict):
             raise _field_error(source, name, "must be an object (or absent)")
+
+
+def read_document(path) -> dict:
+    """The JSON content of the calibration file ``path``; a file that is missing, a folder,
+    unreadable or not JSON raises an error naming it."""
+    source = str(path)
+    try:
+        return json.loads(Path(path).read_text(encoding="utf-8-sig"))
+    except FileNotFoundError:
+        raise MissingFileError("no such calibration file", source=source) from None
+    except IsADirectoryError:
+        raise InputError(
+            "is a folder, not a calibration file", source=source, fix="check the path"
+        ) from None
+    except PermissionError:
+        raise InputError("cannot be read (permission denied)", source=source) from None
+    except UnicodeDecodeError:
+        raise InputError(
+            "not a JSON calibration file (it is not text)",
+            source=source,
+            fix="give a file written by bayescal thermal fit",
+        ) from None
+    except json.JSONDecodeError as error:
+        raise InputError(
+            f"not a JSON calibration file: {error}",
+            source=source,
+            fix="give a file written by bayescal thermal fit",
+        ) from None
+
+
+def document_of(calibration) -> dict:
+    """The file's content of a :class:`~bayescal.ThermalCalibration` (the layout of schema
+    version 1; arrays as NumPy arrays, written as lists)."""
+    document = {
+        "schema": SCHEMA,
+        "schema_version": SCHEMA_VERSION,
+        "channel": calibration.channel,
+        "unit": calibration.unit,
+        "temperature_unit": calibration.temperature_unit,
+        "reference_temperature": calibration.reference,
+        "degree": calibration.degree,
+        "coefficients": calibration.coefficients,
+        "coefficient_units": calibration.coefficient_units,
+        "covariance": calibration.covariance,
+        "temperature_range": list(calibration.temperature_range),
+        "noise": calibration.noise,
+        "earth_rate": calibration.earth_rate,
+        "provenance": list(calibration.provenance),
+        "bayesian": calibration.bayesian,
+    }
+    for key in ("classical", "offsets", "drift"):
+        if getattr(calibration, key) is not None:
+            document[key] = getattr(calibration, key)
+    return to_jsonable(document)
+
+
+def fields_of(document: dict, source: str) -> dict:
+    """The fields of a :class:`~bayescal.ThermalCalibration` from the file's content
+    ``document``, checked field by field first (:func:`check_document`)."""
+    check_document(document, source)
+    return dict(
+        channel=document["channel"],
+        unit=document["unit"],
+        temperature_unit=document["temperature_unit"],
+        reference=float(document["reference_temperature"]),
+        degree=int(document["degree"]),
+        coefficients=np.asarray(document["coefficients"], dtype=float),
+        covariance=np.asarray(document["covariance"], dtype=float),
+        temperature_range=tuple(float(t) for t in document["temperature_range"]),
+        noise=document["noise"],
+        earth_rate=document.get("earth_rate"),
+        provenance=tuple(document["provenance"]),
+        bayesian=document.get("bayesian") or {},
+        classical=document.get("classical"),
+        offsets=document.get("offsets"),
+        drift=document.get("drift"),
+    )

@@ -15,6 +15,7 @@ from ..inference._thermal_posterior import choose_degree, sample_thermal
 from ..models._terms import AUTO, check_terms, parse_terms
 from ..models._thermal import MAX_DEGREE, ThermalRecord, check_temperature, thermal_problem
 from ..models.effects.earth_rotation import earth_rate_on_axis
+from ..recording._inputs import channel_and_temperature
 from ._thermal import ThermalCalibration, provenance_step, with_posterior
 
 NOISE_TERMS = ("white", "bias_instability", "rate_random_walk")
@@ -22,20 +23,20 @@ NOISE_TERMS = ("white", "bias_instability", "rate_random_walk")
 
 def fit_thermal(
     y,
-    temperature,
-    rate_hz: float,
+    temperature=None,
+    rate_hz: float | None = None,
     *,
     degree: int | str = "auto",
     reference: float | None = None,
     terms=NOISE_TERMS,
-    unit: str = "deg/s",
+    unit: str | None = None,
     temperature_unit: str = "degC",
-    channel: str = "gyro",
+    channel: str | None = None,
     latitude: float | None = None,
     axis: str = "up",
     confidence: float = 0.95,
     seed: int = 0,
-    source: str = "<array>",
+    source: str | None = None,
     temperature_name: str = "temperature",
     sampler: Sampler = Sampler(),
 ) -> ThermalCalibration:
@@ -43,12 +44,15 @@ def fit_thermal(
 
     Parameters
     ----------
-    y : array_like
-        The gyro channel (``unit``), NaN where a sample is missing.
-    temperature : array_like
-        Its temperature on the same grid (``temperature_unit``); it must change.
+    y : array_like or Channel
+        The gyro channel (``unit``), NaN where a sample is missing; a
+        :class:`~bayescal.Channel` brings its rate, unit, name, source and the temperature
+        it was prepared with (``Recording.channel(name, temperature=COLUMN)``).
+    temperature : array_like or Channel, optional
+        Its temperature on the same grid, one value per sample (``temperature_unit``); it
+        must change. Default: the Channel's.
     rate_hz : float
-        Sample rate, Hz.
+        Sample rate, Hz (from the channel when ``y`` is one).
     degree : int or "auto"
         Polynomial degree 0..4, or chosen by one-block-ahead predictive density.
     reference : float, optional
@@ -56,8 +60,12 @@ def fit_thermal(
     terms : str or tuple of str
         Noise terms beside the thermal bias (as :func:`fit_noise`; no ramp: a ramp cannot
         be told from a thermal drift).
-    unit, temperature_unit, channel : str
-        Units and the channel's name, written into the calibration.
+    unit : str, optional
+        The channel's unit, written into the calibration (a Channel's own, else deg/s).
+    temperature_unit : str
+        The temperature's unit, written into the calibration.
+    channel : str, optional
+        The channel's name, written into the calibration (a Channel's own, else gyro).
     latitude : float, optional
         Take the Earth rate off the channel first (degrees), with ``axis`` the gyro axis's
         direction (up, down, north, south, east, west, or east,north,up components).
@@ -65,8 +73,10 @@ def fit_thermal(
         Confidence of the classical intervals.
     seed : int
         Seed of the sampler: the same inputs and seed give the same calibration.
-    source, temperature_name : str
-        Where the data come from, for the provenance and the messages.
+    source : str, optional
+        Where the data come from, for the provenance (a Channel's own, else ``<array>``).
+    temperature_name : str
+        The temperature's name, for the messages.
     sampler : Sampler
         How the posterior is sampled (:class:`~bayescal.Sampler`).
 
@@ -79,8 +89,8 @@ def fit_thermal(
     Raises
     ------
     InputError
-        A constant temperature, an unknown term, a ramp among the terms, a degree out of
-        range, too few blocks for the degree.
+        No temperature, one of another length than ``y`` or constant, an unknown term, a
+        ramp among the terms, a degree out of range, too few blocks for the degree.
 
     Examples
     --------
@@ -94,20 +104,33 @@ def fit_thermal(
     >>> calibration.coefficients.round(2)
     array([0.5 , 0.01])
     """
+    sampler = sampler_of(sampler)
     noise_terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
     if noise_terms == AUTO:
         raise InputError(
-            "--terms auto: a thermal calibration takes its noise terms as given",
+            'terms="auto": a thermal calibration takes its noise terms as given',
             fix=f"name them (default: {','.join(NOISE_TERMS)})",
         )
     if "rate_ramp" in noise_terms:
-        raise InputError("--terms: a ramp cannot be told from a thermal drift; leave it out")
+        raise InputError(
+            f"terms={terms!r}: a ramp cannot be told from a thermal drift; leave it out"
+        )
     if degree != "auto" and not (
         isinstance(degree, (int, np.integer)) and 0 <= degree <= MAX_DEGREE
     ):
-        raise InputError(f"--degree {degree!r}", fix=f"give auto or a whole number 0..{MAX_DEGREE}")
-    values = np.asarray(y, dtype=float)
-    temperature = np.asarray(temperature, dtype=float)
+        raise InputError(f"degree={degree!r}", fix=f"give 'auto' or a whole number 0..{MAX_DEGREE}")
+    gyro, temperature = channel_and_temperature(
+        y,
+        temperature,
+        rate_hz,
+        unit=unit,
+        channel=channel,
+        default_unit="deg/s",
+        default_channel="gyro",
+    )
+    values = np.asarray(gyro.values, dtype=float)
+    rate_hz, unit, channel = gyro.rate_hz, gyro.unit, gyro.channel
+    source = source or gyro.source
     check_temperature(temperature, source, temperature_name)
     earth = None
     if latitude is not None:
@@ -126,7 +149,7 @@ def fit_thermal(
         chosen, scores = int(degree), {}
     problem = thermal_problem(record, chosen, reference, noise_prior=noise_prior)
     fit = sample_thermal(
-        problem, chosen, reference, seed=seed, sampler=sampler_of(sampler), degree_scores=scores
+        problem, chosen, reference, seed=seed, sampler=sampler, degree_scores=scores
     )
     base = ThermalCalibration(
         channel=channel,

@@ -217,7 +217,10 @@ def add_recording_arguments(
     """The recording and how to read it: the file, its channel(s) (``channel``: "one" for
     ``--channel``, "three" for ``--channels X,Y,Z``, "many" for ``--channels A,B,...``), the
     unit, the time base, gaps; with ``window``, the analysed window (``--start/--stop`` or
-    ``--pad``); with ``temperature``, the temperature column."""
+    ``--pad``); with ``temperature``, the temperature column.
+
+    Over 80 lines: a list of argument declarations, one per option, each with its help.
+    """
     group = parser.add_argument_group("recording")
     group.add_argument(
         "file",

@@ -15,6 +15,7 @@ import sys
 
 from .._errors import BayescalError
 from . import _discover, _fleet, _multi_position, _noise, _report, _sensors, _thermal, _two_position
+from ._flags import in_flags
 
 INTERNAL_ERROR = 3
 COMMANDS = (_noise, _two_position, _thermal, _report, _multi_position, _discover, _sensors, _fleet)
@@ -118,7 +119,8 @@ def main(argv: list[str] | None = None) -> int:
                 raise _RAISED[received[0]]
             return code
     except BayescalError as error:
-        print(f"bayescal {_command(args)}: error: {error}", file=sys.stderr)
+        message = in_flags(str(error), build_parser())  # the library names its arguments
+        print(f"bayescal {_command(args)}: error: {message}", file=sys.stderr)
         return error.exit_code
     except KeyboardInterrupt:
         print(f"bayescal {_command(args)}: interrupted; no output written", file=sys.stderr)

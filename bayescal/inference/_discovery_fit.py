@@ -71,7 +71,7 @@ class DiscoveryData(eqx.Module):
         if finite < MIN_SAMPLES:
             raise InputError(
                 f"{self.channel}: {finite} samples; discovery needs at least {MIN_SAMPLES}",
-                fix="record longer or widen the window (--start/--stop)",
+                fix="record longer or widen the window (start=/stop=)",
             )
 
     @property

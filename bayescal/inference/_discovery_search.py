@@ -154,7 +154,7 @@ def search_effects(
     unknown = [term for term in baseline if term not in BASELINE_TERMS]
     if unknown:
         raise InputError(
-            f"--baseline: unknown term(s) {', '.join(unknown)}",
+            f"baseline={baseline!r}: unknown term(s) {', '.join(unknown)}",
             fix=f"use terms among {', '.join(sorted(BASELINE_TERMS))}",
         )
     if "white" not in baseline:

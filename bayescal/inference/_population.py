@@ -132,7 +132,7 @@ class RecordingDraws:
             raise InputError(
                 f"channel {self.channel} is in {self.channel_unit}, the fleet's in {unit}",
                 source=self.source,
-                fix="give every recording the same unit (--unit, or the header)",
+                fix="give every recording the same unit (unit=, or the header)",
             )
         factor = have.to_si / want.to_si
         shift = math.log(factor)

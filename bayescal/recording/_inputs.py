@@ -102,11 +102,53 @@ def check_same_length(reference: tuple[str, object], *others: tuple[str, object]
             continue
         if _length(series) != length:
             raise InputError(
-                f"{other} has {_length(series)} samples but {name} has {length}",
+                f"{other} has {_length(series)} values but {name} has {length}",
                 fix=f"give {other} on the sample grid of {name}, one value per sample",
             )
 
 
 def _length(values) -> int:
+    """The length of ``values`` along its first axis (a list's: its items, which may differ
+    in shape; a number's: 1)."""
+    if isinstance(values, (list, tuple)):
+        return len(values)
     shape = np.shape(values)
     return int(shape[0]) if shape else 1
+
+
+def channel_and_temperature(
+    y,
+    temperature,
+    rate_hz,
+    *,
+    unit: str | None,
+    channel: str | None = None,
+    default_unit: str = "unit",
+    default_channel: str = "channel",
+) -> tuple[ChannelInput, np.ndarray]:
+    """The channel ``y`` (an array, or a Channel with its rate, unit, name, source and the
+    temperature it was prepared with) and its temperature, one value per sample."""
+    given = channel_input(
+        y,
+        rate_hz,
+        unit=unit,
+        channel=channel,
+        default_unit=default_unit,
+        default_channel=default_channel,
+    )
+    temperature = temperature_of(y, temperature)
+    check_same_length(("y", given.values), ("temperature", temperature))
+    return given, temperature
+
+
+def temperature_of(y, temperature) -> np.ndarray:
+    """``temperature`` as samples, or, when it is None, those of the Channel ``y``."""
+    if temperature is None and isinstance(y, Channel):
+        temperature = y.temperature
+    if temperature is None:
+        raise InputError(
+            "temperature: none given, and y carries none",
+            fix="pass temperature= (one value per sample), or give a Channel prepared with "
+            "Recording.channel(name, temperature=COLUMN)",
+        )
+    return samples(temperature, "temperature")

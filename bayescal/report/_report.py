@@ -115,6 +115,9 @@ def report_recording(
 
     ``sampler``: how every posterior is sampled; its ``progress`` also shows the report's own
     bar over the channels.
+
+    Over 80 lines: one pass over the channels with the progress bar and the discoveries it
+    interleaves, then the files.
     """
     parsed_terms = parse_terms(terms)
     card = find_card(sensor) if sensor else None

@@ -48,6 +48,8 @@ _EXPORTS = {
     # models
     "NoiseModel": "models._noise_model",
     "FleetPopulation": "models._population",
+    # inference
+    "Sampler": "inference._sampler",
     # capabilities
     "fit_noise": "capabilities._noise",
     "NoiseFit": "capabilities._noise",
@@ -55,7 +57,7 @@ _EXPORTS = {
     "TwoPositionCalibration": "capabilities._two_position",
     "calibrate_multi_position": "capabilities._multi_position",
     "MultiPositionCalibration": "capabilities._multi_position",
-    "fit_thermal": "capabilities._thermal",
+    "fit_thermal": "capabilities._thermal_fit",
     "ThermalCalibration": "capabilities._thermal",
     "load_thermal_calibration": "capabilities._thermal",
     "discover": "capabilities._discovery",

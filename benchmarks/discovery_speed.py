@@ -50,7 +50,7 @@ def timed_discovery(values, temperature, seed):
         unit="deg/s",
         channel="gyro_x",
         seed=seed,
-        progress=lambda _: stamps.append(time.perf_counter()),
+        log=lambda _: stamps.append(time.perf_counter()),
     )
     return result, stamps[-1]
 

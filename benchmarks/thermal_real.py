@@ -16,8 +16,8 @@ import h5py
 import numpy as np
 
 import bayescal as bc
-from bayescal.capabilities._thermal import choose_degree
 from bayescal.inference._priors import default_prior
+from bayescal.inference._thermal_posterior import choose_degree
 from bayescal.models._thermal import ThermalRecord
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"

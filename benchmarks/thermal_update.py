@@ -23,8 +23,8 @@ import jax
 import numpy as np
 
 import bayescal as bc
-from bayescal.capabilities._thermal import sample_thermal
 from bayescal.inference._priors import default_prior
+from bayescal.inference._thermal_posterior import sample_thermal
 from bayescal.models._thermal import ThermalRecord, thermal_problem
 
 RATE, T0 = 10.0, 35.0

@@ -505,7 +505,7 @@ def test_text_that_is_not_the_table_it_seems(run_cli, tmp_path, good_columns):
         (["--skip-rows", "-1"], ["--skip-rows"]),
         (["--names", "a,,b"], ["a name is empty"]),
         (["--samples-axis", "0"], ["apply to arrays"]),
-        (["--time-unit", "furlong"], ["--time-unit 'furlong' is not a unit of time"]),
+        (["--time-unit", "furlong"], ["--time-unit furlong is not a unit of time"]),
         (["--topic", "/imu"], ["only a ROS bag has topics"]),
     ],
 )

@@ -276,7 +276,7 @@ def _time_search_context(duration_s: float, rate_hz: float = 100.0):
     from types import SimpleNamespace
 
     return SimpleNamespace(
-        data=SimpleNamespace(duration_s=duration_s, rate_hz=rate_hz), summaries={}
+        data=SimpleNamespace(duration_s=duration_s, rate_hz=rate_hz), time_constants={}
     )
 
 
@@ -284,7 +284,7 @@ def test_a_record_of_seconds_searches_no_time_constant():
     """A pad window of 5.8 s (the TARS mk2 flight log's) is shorter than three times the
     shortest time constant: the Gauss-Markov and warm-up searches are not proposed (they
     once searched a reversed grid and crashed on a 10^35 s Gauss-Markov covariance)."""
-    from bayescal.capabilities import _discovery
+    from bayescal.inference import _discovery_fit as _discovery
 
     context = _time_search_context(5.8)
     assert _discovery.search_time(context, lambda t: pytest.fail("fitted"), "gauss_markov") is None
@@ -296,7 +296,7 @@ def test_a_flat_time_profile_samples_its_interval_within_the_record(monkeypatch)
     constant instead, where the record can still tell a decay from a ramp or white noise."""
     from types import SimpleNamespace
 
-    from bayescal.capabilities import _discovery
+    from bayescal.inference import _discovery_fit as _discovery
 
     def almost_flat(spec):
         log_t = math.log(spec)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import bayescal as bc
-from bayescal.capabilities._discovery import DECISIVE_LOG_BAYES_FACTOR
+from bayescal.inference._discovery_search import DECISIVE_LOG_BAYES_FACTOR
 
 
 def _load_suite():

@@ -580,13 +580,13 @@ def joint_fit(manifest, fleet) -> dict:
 def _counts_task(tmp_path, **reading):
     """A raw-count gyro (131 LSB per deg/s, white noise N = 0.004 deg/s/sqrt(Hz), bias
     0.3 deg/s) logged as CSV behind two lines of logger metadata."""
-    from bayescal.capabilities._fleet import RecordingTask
+    from bayescal.capabilities._fleet_tasks import RecordingTask
 
     values = bc.NoiseModel(rate_hz=100.0, bias=0.3, N=0.004).simulate(2**12, seed=5)
     path = tmp_path / "logger.csv"
     rows = "\n".join(f"{k / 100:.2f},{131 * v:.3f}" for k, v in enumerate(values))
     path.write_text(f"logger v2.1\nserial 0042\ntime,gyro_x\n{rows}\n")
-    grid = {"unit": "deg/s", "scale": 1 / 131, "rate": None, "gaps": "error"}
+    grid = {"unit": "deg/s", "scale": 1 / 131, "rate_hz": None, "gaps": "error"}
     return RecordingTask(
         row=1,
         path=str(path),
@@ -597,8 +597,7 @@ def _counts_task(tmp_path, **reading):
         terms=("white",),
         sensor=None,
         seed=3,
-        n_walkers=32,
-        max_steps=40_000,
+        sampler=bc.Sampler(),
         reading={"skip_rows": 2, **reading},
     )
 
@@ -606,7 +605,7 @@ def _counts_task(tmp_path, **reading):
 def test_a_worker_reads_a_logger_file_of_raw_counts_as_told(tmp_path):
     """skip_rows passes the logger's lines, scale turns counts into deg/s: the recording's N
     comes back in deg/s/sqrt(Hz), near the truth (a 41 s record: within 10 %)."""
-    from bayescal.capabilities._fleet import fit_recording
+    from bayescal.capabilities._fleet_tasks import fit_recording
     from bayescal.inference._population import RecordingDraws
 
     result = fit_recording(_counts_task(tmp_path))
@@ -618,7 +617,7 @@ def test_a_worker_reads_a_logger_file_of_raw_counts_as_told(tmp_path):
 
 
 def test_a_streamed_recording_refuses_the_options_of_arrays_and_bags(tmp_path, monkeypatch):
-    from bayescal.capabilities._fleet import RecordingFailure, fit_recording
+    from bayescal.capabilities._fleet_tasks import RecordingFailure, fit_recording
     from bayescal.recording import _stream
 
     monkeypatch.setattr(_stream, "is_long_recording", lambda path: True)

@@ -191,7 +191,7 @@ def test_each_sample_takes_its_place_on_the_grid_whatever_the_stamps(tmp_path):
     even = np.arange(values.size) / RATE
     jitter = even + 1e-5 * np.random.default_rng(1).standard_normal(values.size)
     given = bc.Recording("given", {"gyro_x": values}, {"gyro_x": "deg/s"}).channel(
-        "gyro_x", rate=RATE
+        "gyro_x", rate_hz=RATE
     )
     for stamps in (even, jitter, 1e6 + even):
         path = tmp_path / "gyro.parquet"
@@ -215,7 +215,7 @@ def test_a_gap_between_blocks_is_refused_by_row_as_in_memory(small_blocks, tmp_p
     write_table(path, values, time)
     with pytest.raises(bc.InputError, match=r"gap of 5\.01 s") as error:
         stream_channel(path, "gyro_x")
-    assert "data row 8193" in str(error.value) and "--gaps split" in error.value.fix
+    assert "data row 8193" in str(error.value) and 'gaps="split"' in error.value.fix
 
 
 def test_the_posterior_of_a_streamed_channel_is_the_in_memory_one(small_blocks, tmp_path):

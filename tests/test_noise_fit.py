@@ -88,7 +88,7 @@ def test_same_seed_same_posterior():
 
 def test_health_check_fails_loudly_when_the_chain_is_too_short():
     values = simulate(4, 2**12, 10.0, bias=0.1, N=0.01, K=1e-3)
-    result = fit(values, 10.0, max_steps=250)
+    result = fit(values, 10.0, sampler=bc.Sampler(max_steps=250))
     assert not result.diagnostics.passed and not result.diagnostics.converged
     assert any(
         "autocorrelation-time criterion" in failure for failure in result.diagnostics.failures

@@ -10,7 +10,7 @@ import pytest
 from recording_files import write_csv
 
 import bayescal as bc
-from bayescal.capabilities._discovery import DECISIVE_LOG_BAYES_FACTOR
+from bayescal.inference._discovery_search import DECISIVE_LOG_BAYES_FACTOR
 from bayescal.models.effects.saturation import impute_clipped, saturation_scan
 from bayescal.recording._levels import discrete_step, rail_check
 

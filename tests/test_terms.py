@@ -94,7 +94,7 @@ def test_a_fit_reports_every_interval_inside_its_range(terms, truth):
     """Fitted with every term (and each low-pass shape), each parameter's posterior mean,
     interval and MAP lie in its range."""
     values = bc.NoiseModel(RATE, 0.2, **truth).simulate(2**13, seed=4)
-    fit = bc.fit_noise(values, RATE, terms=terms, seed=1, max_steps=3000)
+    fit = bc.fit_noise(values, RATE, terms=terms, seed=1, sampler=bc.Sampler(max_steps=3000))
     context = fit.fit.problem.context
     for name, summary in fit.summary.items():
         if name == "bias":

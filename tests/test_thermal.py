@@ -9,8 +9,8 @@ import pytest
 from recording_files import write_csv
 
 import bayescal as bc
-from bayescal.capabilities._thermal import sample_thermal
 from bayescal.inference._priors import default_prior
+from bayescal.inference._thermal_posterior import sample_thermal
 from bayescal.models._noise_problem import NoisePrior
 from bayescal.models._thermal import ThermalRecord, _identified_from, thermal_problem
 

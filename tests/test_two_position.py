@@ -38,7 +38,7 @@ def test_local_gravity_computed_or_measured():
         bc.LocalGravity.measured(98.1)
     with pytest.raises(bc.InputError, match="uncertainty"):
         bc.LocalGravity.measured(9.81, -1.0)
-    with pytest.raises(bc.InputError, match="--latitude"):
+    with pytest.raises(bc.InputError, match="latitude_deg"):
         bc.local_gravity(100.0)
 
 

@@ -62,7 +62,7 @@ def demo_recording(seed: int = 0, minutes: float = 25.0) -> tuple[dict, dict]:
     n = round(minutes * 60 * RATE_HZ)
     if n < MIN_SAMPLES:
         raise InputError(
-            f"--minutes {minutes:g}: the demo needs at least {MIN_SAMPLES / RATE_HZ / 60:.2f}"
+            f"minutes={minutes:g}: the demo needs at least {MIN_SAMPLES / RATE_HZ / 60:.2f}"
         )
     time = np.arange(n) / RATE_HZ
     keys = jax.random.split(jax.random.PRNGKey(seed), len(DEMO_CHANNELS))

@@ -1,15 +1,6 @@
 """A fleet of sensors: the noise of each recording, fitted on a Dask cluster, and the
-population of the units on top (:mod:`bayescal.inference._population`).
-
-Where the work runs. Each recording's load and noise fit is one Dask task
-(:func:`fit_recording`); it ships back only what the population needs
-(:class:`~bayescal.inference._population.RecordingDraws`: about 80 kB, where the fit holds
-the record's spectral and level summaries too). With no scheduler a ``LocalCluster`` of one
-single-threaded worker process per core (or ``workers``) runs them; with an address
-(``tcp://host:port``) an existing cluster does, through the same code; an existing
-``distributed.Client`` may be passed too. The workers read the recordings themselves, so a
-remote cluster needs the manifest's files at the same paths (a shared file system) and the
-same bayescal (checked before any task is sent). The population is fitted on the client.
+population of the units on top (:mod:`bayescal.inference._population`). Where the work runs
+is :mod:`._fleet_tasks`; the specifications a unit is assessed against, :mod:`._fleet_spec`.
 
 Seeds. The fleet's seed gives each recording its own, from the seed and the recording's data
 row (``numpy.random.SeedSequence([seed, 1, row])``), and the population its own
@@ -27,21 +18,13 @@ it (its fit checks, :attr:`~bayescal.NoiseFit.checks`) is left out and reported 
 any other failure (``misfit``).
 """
 
-import math
-import os
-import pickle
-import re
-import sys
-import time
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
-from importlib.metadata import version
 from pathlib import Path
 
 import numpy as np
 
-from .._errors import BayescalError, HealthCheckError, InputError
+from .._errors import HealthCheckError, InputError
 from ..inference._population import (
     Limit,
     PopulationPosterior,
@@ -53,293 +36,12 @@ from ..inference._population import (
     resolved_parameters,
     spec_probabilities,
 )
-from ..models._terms import (
-    CLASSICAL_TERMS,
-    PARAMETERS_OF_TERM,
-    TERM_OF_PARAMETER,
-    card_values,
-    display_values,
-    fleet_terms,
-    parameter_unit,
-)
+from ..inference._sampler import Sampler, sampler_of
+from ..models._terms import CLASSICAL_TERMS, display_values, fleet_terms, parameter_unit
 from ..recording._manifest import Manifest, read_manifest
 from ..recording._sensor_cards import SensorCard, find_card
-from ..recording._units import convert, parse_unit
-
-SPEC_PARAMETERS = ("N", "B", "K", "bias")
-CONNECT_TIMEOUT_S = 30
-_LIMIT = re.compile(r"\s*(\w+)\s*<=?\s*([-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(.*?)\s*")
-
-
-@dataclass(frozen=True)
-class RecordingTask:
-    """One recording to fit: everything a worker needs, and nothing it must look up."""
-
-    row: int
-    path: str
-    unit: str
-    run: str
-    channel: str
-    grid: dict
-    """How the channel is put on its grid (:meth:`~bayescal.Recording.channel`'s options)."""
-    terms: tuple[str, ...]
-    sensor: SensorCard | None
-    seed: int
-    n_walkers: int
-    max_steps: int
-    temperature_c: float | None = None
-    reading: dict = field(default_factory=dict)
-    """How the file is read (:func:`~bayescal.load_recording`'s options: ``skip_rows``,
-    ``names``, ``topic``, ``samples_axis``, ``channels_axis``)."""
-
-
-@dataclass(frozen=True)
-class RecordingFailure:
-    """A recording left out of the population, and why."""
-
-    row: int
-    source: str
-    unit: str
-    run: str
-    kind: str
-    """``input`` (cannot be read or analysed as given), ``health`` (its posterior failed its
-    sampler checks), ``misfit`` (the fitted model does not fit the record: its Allan deviation,
-    spectrum or lag-1 autocorrelation checks failed, :attr:`~bayescal.NoiseFit.checks`) or
-    ``task`` (its task failed: a worker lost, an internal error)."""
-    message: str
-
-
-def recording_draws(fit, task: RecordingTask, seconds: float) -> RecordingDraws:
-    """What the population needs of a :class:`~bayescal.NoiseFit`."""
-    problem = fit.fit.problem
-    prior = problem.prior
-    fitted = [p for p in ("N", "B", "K") if p in problem.parameters]
-    index = {p: problem.parameters.index(p) for p in fitted}
-    bias_mean, bias_sd = (np.ravel(value) for value in fit.fit.bias_conditional)
-    diagnostics = fit.diagnostics
-    return RecordingDraws(
-        source=fit.source,
-        unit=task.unit,
-        run=task.run,
-        channel=fit.channel,
-        channel_unit=fit.unit,
-        rate_hz=fit.rate_hz,
-        n_samples=fit.classical.n_samples,
-        terms=fit.terms,
-        log_draws={p: np.log(np.ravel(fit.draws[p])) for p in fitted},
-        prior_location={p: float(prior.location[i]) for p, i in index.items()},
-        prior_scale={p: float(prior.scale[i]) for p, i in index.items()},
-        bias_mean=bias_mean,
-        bias_sd=bias_sd,
-        prior=prior.description,
-        seed=task.seed,
-        passed=fit.passed,
-        failures=fit.failures,
-        checks={
-            "n_steps": diagnostics.n_steps,
-            "n_walkers": diagnostics.n_walkers,
-            "max_rhat": max(diagnostics.rhat.values()),
-            "min_ess_bulk": min(diagnostics.ess_bulk.values()),
-            "acceptance_fraction": diagnostics.acceptance_fraction,
-        },
-        notes=fit.notes,
-        row=task.row,
-        temperature_c=task.temperature_c,
-        seconds=seconds,
-    )
-
-
-def fit_recording(task: RecordingTask) -> RecordingDraws | RecordingFailure:
-    """One Dask task: load a recording, fit its channel's noise, keep what the population
-    needs; a recording that cannot be used comes back as a :class:`RecordingFailure`."""
-    from ..recording._recording import load_recording
-    from ..recording._stream import is_long_recording, stream_channel
-    from ._noise import fit_noise
-
-    started = time.perf_counter()
-    try:
-        if is_long_recording(task.path):  # a worker's memory bounded by a block, as noise's
-            _refuse_unstreamed(task)
-            skip_rows = task.reading.get("skip_rows", 0)
-            channel = stream_channel(task.path, task.channel, skip_rows=skip_rows, **task.grid)
-        else:
-            channel = load_recording(task.path, **task.reading).channel(task.channel, **task.grid)
-        fit = fit_noise(
-            channel,
-            terms=task.terms,
-            sensor=task.sensor,
-            seed=task.seed,
-            n_walkers=task.n_walkers,
-            max_steps=task.max_steps,
-        )
-    except BayescalError as error:
-        kind = "input" if isinstance(error, InputError) else "health"
-        return RecordingFailure(task.row, task.path, task.unit, task.run, kind, str(error))
-    if not fit.diagnostics.passed:
-        return RecordingFailure(
-            task.row,
-            task.path,
-            task.unit,
-            task.run,
-            "health",
-            "posterior checks failed: " + "; ".join(fit.failures),
-        )
-    if not fit.fits:
-        return RecordingFailure(
-            task.row,
-            task.path,
-            task.unit,
-            task.run,
-            "misfit",
-            f"the model ({', '.join(fit.terms)}) does not fit the record: "
-            + "; ".join(fit.misfits),
-        )
-    return recording_draws(fit, task, time.perf_counter() - started)
-
-
-def _refuse_unstreamed(task: RecordingTask) -> None:
-    """A long recording is streamed (a Parquet file or a text table, read in blocks): the
-    options of arrays, bags and headerless tables do not apply to it."""
-    given = [
-        name
-        for name in ("names", "topic", "samples_axis", "channels_axis")
-        if task.reading.get(name) is not None
-    ]
-    if given:
-        raise InputError(
-            f"{given[0]} does not apply to a long recording, which is streamed (read in blocks)",
-            source=task.path,
-            fix="leave it out: a streamed file is a Parquet file or a text table with a "
-            "header line",
-        )
-
-
-def worker_version() -> str:
-    """The bayescal a worker runs (checked against the client's before any task)."""
-    return version("bayescal")
-
-
-# ---------------------------------------------------------------------------------------------
-# Specifications
-
-
-@dataclass(frozen=True)
-class _Requested:
-    parameter: str
-    value: float
-    unit: str | None
-    label: str
-
-
-def _requested_limits(spec) -> tuple[list[_Requested], SensorCard | None]:
-    """Parse ``spec`` (see :func:`fit_fleet`) into limits still in the user's units and at
-    most one sensor card; checked before any work."""
-    if spec is None:
-        return [], None
-    if isinstance(spec, (str, SensorCard)):
-        spec = [spec]
-    items = list(spec.items()) if isinstance(spec, Mapping) else list(spec)
-    limits, card = [], None
-    for item in items:
-        if isinstance(item, SensorCard) or (isinstance(item, str) and "<" not in item):
-            if card is not None:
-                raise InputError("spec: give at most one sensor card")
-            card = item if isinstance(item, SensorCard) else find_card(item)
-            continue
-        if isinstance(item, str):
-            match = _LIMIT.fullmatch(item)
-            if match is None:
-                raise InputError(
-                    f"spec: '{item}' is not PARAMETER<VALUE UNIT",
-                    fix="write it like 'N<0.3 deg/sqrt(h)', 'B<10 deg/h' or 'bias<0.5 deg/s'",
-                )
-            name, value, unit, label = match[1], float(match[2]), match[3] or None, item.strip()
-        else:
-            name, given = item
-            text = str(given).strip()
-            parts = text.split(maxsplit=1)
-            try:
-                value = float(parts[0])
-            except (ValueError, IndexError):
-                raise InputError(
-                    f"spec: {name}={given!r} is not VALUE [UNIT]",
-                    fix="give a number in the parameter's unit, or 'VALUE UNIT'",
-                ) from None
-            unit = parts[1] if len(parts) > 1 else None
-            label = f"{name}<{text}"
-        if name not in SPEC_PARAMETERS:
-            raise InputError(
-                f"spec: unknown parameter '{name}'",
-                fix=f"limits apply to {', '.join(SPEC_PARAMETERS)}",
-            )
-        if not (value > 0 and math.isfinite(value)):
-            raise InputError(f"spec: the limit of {name} must be a positive number ({value})")
-        limits.append(_Requested(name, value, unit, label))
-    return limits, card
-
-
-_FAMILY = {"angle": "angular_rate", "velocity": "acceleration"}
-
-
-def _check_family(unit: str, channel_unit: str) -> None:
-    """A noise figure's unit (deg/sqrt(h), ug/sqrt(Hz) ...) must belong to the channel's kind
-    of sensor: a gyro's limit in ug is a mistake, not a conversion."""
-    base = parse_unit(re.split(r"[/*]sqrt", unit)[0])
-    channel = parse_unit(channel_unit)
-    if base.known and channel.known:
-        quantity = _FAMILY.get(base.quantity, base.quantity)
-        if quantity != channel.quantity:
-            raise ValueError(
-                f"'{unit}' is a unit of {quantity.replace('_', ' ')}, the channel's "
-                f"{channel_unit} of {channel.quantity.replace('_', ' ')}"
-            )
-
-
-def _limit_in(requested: _Requested, channel_unit: str) -> Limit:
-    """A requested limit in the parameter's unit for the fleet's channel."""
-    name = requested.parameter
-    target = parameter_unit(name, channel_unit)
-    value = requested.value
-    if requested.unit is not None and requested.unit != target:
-        try:
-            if name != "bias":
-                _check_family(requested.unit, channel_unit)
-            value = convert(value, requested.unit, target)
-        except ValueError as error:
-            raise InputError(
-                f"spec '{requested.label}': {error}",
-                fix=f"give {name} in {target} or a datasheet unit of this kind of channel",
-            ) from None
-    shown = "|bias|" if name == "bias" else name
-    label = f"{shown} < {requested.value:g} {requested.unit or target}"
-    return Limit(name, value, target, f"given: {requested.label}", label)
-
-
-def _card_limits(card: SensorCard, channel_unit: str) -> list[Limit]:
-    try:
-        values = card_values(card, channel_unit)
-    except InputError as error:
-        raise InputError(f"spec {card.name}: {error.problem}", fix=error.fix) from None
-    limits = []
-    for p, (value, source) in values.items():
-        unit = parameter_unit(p, channel_unit)
-        shown = ", ".join(
-            f"{v:.3g} {label}" for label, v in display_values(p, value, channel_unit).items()
-        )
-        limits.append(
-            Limit(
-                p,
-                value,
-                unit,
-                f"{card.name} datasheet ({card.datasheet}), {source}: a typical value",
-                f"{p} <= {value:.4g} {unit}" + (f" ({shown})" if shown else ""),
-            )
-        )
-    return limits
-
-
-# ---------------------------------------------------------------------------------------------
-# The result
+from ._fleet_spec import assessed_limits, checked_spec
+from ._fleet_tasks import RecordingFailure, RecordingTask, run_on_cluster
 
 
 def _interval(draws, unit: str, transform=None) -> dict:
@@ -589,113 +291,26 @@ class FleetFit:
         }
 
 
-# ---------------------------------------------------------------------------------------------
-# The cluster
-
-
-def _client(scheduler, workers: int | None):
-    """A Dask client: on a new LocalCluster (scheduler None), an existing cluster (an
-    address), or the client given. Returns it, whether to close it, and how it is called."""
-    import logging
-    import warnings
-
-    from distributed import Client, LocalCluster
-
-    if scheduler is None:
-        count = workers or os.cpu_count() or 1
-        with warnings.catch_warnings():
-            # The scheduler's HTTP endpoint moving off a busy port is no news to a user.
-            warnings.filterwarnings("ignore", "Port .* is already in use")
-            cluster = LocalCluster(
-                n_workers=count,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-            )
-        return Client(cluster), cluster, "local"
-    if workers is not None:
-        raise InputError(
-            "--workers sets the size of a local cluster; with --scheduler the cluster's own "
-            "workers run the tasks",
-            fix="leave --workers out",
-        )
-    if isinstance(scheduler, Client):
-        return scheduler, None, "client"
-    try:
-        client = Client(str(scheduler), timeout=CONNECT_TIMEOUT_S)
-    except (OSError, TimeoutError, ValueError) as error:
-        raise InputError(
-            f"--scheduler {scheduler}: cannot connect ({error})",
-            fix="give the address of a running Dask scheduler, e.g. tcp://host:8786",
-        ) from None
-    return client, None, "remote"
-
-
-def _check_workers(client, address: str) -> int:
-    """The number of workers, after checking that each runs this bayescal."""
-    try:
-        client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
-    except TimeoutError:
-        raise InputError(
-            f"--scheduler {address}: no worker joined within {CONNECT_TIMEOUT_S} s",
-            fix="start workers (dask worker ADDRESS)",
-        ) from None
-    try:
-        versions = client.run(worker_version)
-    except Exception as error:  # an unpicklable function: bayescal missing on a worker
-        raise InputError(
-            f"--scheduler {address}: the workers cannot run bayescal ({type(error).__name__}: "
-            f"{error})",
-            fix="install the same bayescal on every worker",
-        ) from None
-    mine = version("bayescal")
-    other = {worker: v for worker, v in versions.items() if v != mine}
-    if other:
-        raise InputError(
-            f"--scheduler {address}: workers run bayescal {sorted(set(other.values()))}, "
-            f"this client {mine}",
-            fix="install the same bayescal on every worker",
-        )
-    return len(versions)
-
-
-def _run_tasks(client, tasks, progress: bool):
-    """Submit every task, collect every result in row order; a failed task becomes a
-    :class:`RecordingFailure`."""
-    from distributed import as_completed
-
-    futures = {client.submit(fit_recording, task, pure=False, retries=1): task for task in tasks}
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=len(tasks), desc="fleet (recordings)", unit="rec", file=sys.stderr)
-    results, sizes = {}, {}
-    try:
-        for future in as_completed(futures):
-            task = futures[future]
-            if future.status == "error":
-                error = future.exception()
-                results[task.row] = RecordingFailure(
-                    task.row,
-                    task.path,
-                    task.unit,
-                    task.run,
-                    "task",
-                    f"{type(error).__name__}: {error}",
-                )
-            else:
-                result = future.result()
-                sizes[task.row] = len(pickle.dumps(result))
-                results[task.row] = result
-            if bar is not None:
-                bar.update(1)
-    finally:
-        if bar is not None:
-            bar.close()
-        client.cancel(list(futures))
-    return [results[task.row] for task in tasks], sizes
+def _compute(where: dict, n_tasks: int, fitted, sizes: dict) -> dict:
+    """Where the work ran (``where``: scheduler, cluster, workers, wall time), the number of
+    tasks, and the fitted tasks' times and sizes."""
+    seconds = [r.seconds for r in fitted]
+    return {
+        "scheduler": where["scheduler"],
+        "cluster": where["cluster"],
+        "workers": where["workers"],
+        "tasks": n_tasks,
+        "wall_s": where["wall_s"],
+        "task_s": {
+            "mean": float(np.mean(seconds)),
+            "max": float(np.max(seconds)),
+            "total": float(np.sum(seconds)),
+        },
+        "result_bytes": {
+            "mean": float(np.mean(list(sizes.values()))),
+            "max": int(max(sizes.values())),
+        },
+    }
 
 
 def _seed(*key: int) -> int:
@@ -712,7 +327,7 @@ def fit_fleet(
     seed: int = 0,
     unit: str | None = None,
     scale: float | None = None,
-    rate: float | None = None,
+    rate_hz: float | None = None,
     time_column: str | None = None,
     time_unit: str | None = None,
     gaps: str = "error",
@@ -725,9 +340,7 @@ def fit_fleet(
     channels_axis: int | None = None,
     scheduler=None,
     workers: int | None = None,
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> FleetFit:
     """The population of a fleet of sensors, from each recording's noise posterior.
 
@@ -754,10 +367,10 @@ def fit_fleet(
         parameter's unit for the channel).
     seed : int
         The fleet's seed; each recording's and the population's derive from it.
-    unit, scale, rate, time_column, time_unit, gaps, start, stop
+    unit, scale, rate_hz, time_column, time_unit, gaps, start, stop
         How each recording's channel is put on its grid (:meth:`~bayescal.Recording.channel`;
         ``scale`` turns raw counts into ``unit``); a manifest row's ``rate`` overrides
-        ``rate``.
+        ``rate_hz``.
     skip_rows, names, topic, samples_axis, channels_axis
         How each file is read (:func:`~bayescal.load_recording`): logger lines before a text
         table's header, the names of a headerless table's or an array's columns, a ROS bag's
@@ -768,10 +381,10 @@ def fit_fleet(
         ``LocalCluster`` of ``workers`` processes (default: one per core).
     workers : int, optional
         Worker processes of the local cluster.
-    n_walkers, max_steps : int
-        emcee settings of every posterior (each recording's and the population's).
-    progress : bool
-        A progress bar over the recordings on stderr.
+    sampler : Sampler
+        How every posterior is sampled, each recording's and the population's
+        (:class:`~bayescal.Sampler`); its ``progress`` shows a bar over the recordings and
+        the population's sampling on stderr.
 
     Returns
     -------
@@ -799,22 +412,10 @@ def fit_fleet(
             "a fleet needs at least two recordings", source=manifest.source, fix="add rows"
         )
     terms = fleet_terms(terms)
+    sampler = sampler_of(sampler)
     if isinstance(sensor, str):
         sensor = find_card(sensor)
-    requested, card = _requested_limits(spec)
-    fitted_parameters = {p for term in terms for p in PARAMETERS_OF_TERM[term]}
-    for limit in requested:
-        if limit.parameter != "bias" and limit.parameter not in fitted_parameters:
-            raise InputError(
-                f"spec '{limit.label}': {limit.parameter} is not among the fitted terms "
-                f"({', '.join(terms)})",
-                fix=f"add {TERM_OF_PARAMETER[limit.parameter]} to the terms, or leave it out",
-            )
-    if unit is not None:  # the limits' units are checked before any work when they can be
-        for limit in requested:
-            _limit_in(limit, parse_unit(unit).name)
-        if card is not None:
-            _card_limits(card, parse_unit(unit).name)
+    requested, card = checked_spec(spec, terms, unit)
     grid = {
         "unit": unit,
         "scale": scale,
@@ -824,6 +425,13 @@ def fit_fleet(
         "start": start,
         "stop": stop,
     }
+    reading = {
+        "skip_rows": skip_rows,
+        "names": names,
+        "topic": topic,
+        "samples_axis": samples_axis,
+        "channels_axis": channels_axis,
+    }
     tasks = [
         RecordingTask(
             row=row.row,
@@ -831,36 +439,17 @@ def fit_fleet(
             unit=row.unit,
             run=row.run,
             channel=channel,
-            grid={**grid, "rate": row.rate_hz or rate},
+            grid={**grid, "rate_hz": row.rate_hz or rate_hz},
             terms=terms,
             sensor=sensor,
             seed=_seed(seed, 1, row.row),
-            n_walkers=n_walkers,
-            max_steps=max_steps,
+            sampler=replace(sampler, progress=False),
             temperature_c=row.temperature_c,
-            reading={
-                "skip_rows": skip_rows,
-                "names": names,
-                "topic": topic,
-                "samples_axis": samples_axis,
-                "channels_axis": channels_axis,
-            },
+            reading=reading,
         )
         for row in manifest.rows
     ]
-    started = time.perf_counter()
-    client, cluster, kind = _client(scheduler, workers)
-    try:
-        address = client.scheduler.address
-        worker_count = _check_workers(client, address)
-        results, sizes = _run_tasks(client, tasks, progress)
-        worker_count = max(worker_count, len(client.nthreads()))
-    finally:
-        if kind != "client":
-            client.close()
-        if cluster is not None:
-            cluster.close()
-    elapsed = time.perf_counter() - started
+    results, sizes, where = run_on_cluster(tasks, scheduler, workers, sampler.progress)
     fitted = [r for r in results if isinstance(r, RecordingDraws)]
     failed = tuple(r for r in results if isinstance(r, RecordingFailure))
     if len(fitted) < 2:
@@ -871,46 +460,14 @@ def fit_fleet(
         )
     fleet_unit = fitted[0].channel_unit
     fitted = [r.in_unit(fleet_unit) for r in fitted]
-    limits = [_limit_in(r, fleet_unit) for r in requested]
-    if card is not None:
-        limits += _card_limits(card, fleet_unit)
     parameters, notes = resolved_parameters(fitted)
-    assessed = [limit for limit in limits if limit.parameter in (*parameters, "bias")]
-    notes += [
-        f"spec {limit.label}: {limit.parameter} has no population here (not fitted, or not "
-        "resolved by the recordings): not assessed"
-        for limit in limits
-        if limit not in assessed
-    ]
+    assessed, unassessed = assessed_limits(requested, card, fleet_unit, parameters)
     posterior = fit_population(
         fitted,
         parameters,
         seed=_seed(seed, 0),
-        n_walkers=n_walkers,
-        max_steps=max_steps,
-        progress=progress,
+        sampler=sampler,
     )
-    seconds = [r.seconds for r in fitted]
-    compute = {
-        "scheduler": address,
-        "cluster": {
-            "local": "LocalCluster started for this fleet",
-            "remote": "existing cluster",
-            "client": "existing client",
-        }[kind],
-        "workers": worker_count,
-        "tasks": len(tasks),
-        "wall_s": elapsed,
-        "task_s": {
-            "mean": float(np.mean(seconds)),
-            "max": float(np.max(seconds)),
-            "total": float(np.sum(seconds)),
-        },
-        "result_bytes": {
-            "mean": float(np.mean(list(sizes.values()))),
-            "max": int(max(sizes.values())),
-        },
-    }
     return FleetFit(
         source=manifest.source,
         channel=channel,
@@ -920,7 +477,7 @@ def fit_fleet(
         failed=failed,
         population=posterior,
         limits=tuple(assessed),
-        compute=compute,
+        compute=_compute(where, len(tasks), fitted, sizes),
         seed=seed,
-        notes=tuple(notes),
+        notes=(*notes, *unassessed),
     )

@@ -1,14 +1,13 @@
 """Multi-position accelerometer calibration: the classical least squares with g fixed
 (:mod:`bayescal.classical._multi_position`) and the posterior of the Bayesian model
-(:mod:`bayescal.models._multi_position`), g_local drawn from its prior for each draw."""
+(:mod:`bayescal.models._multi_position`; sampled by
+:mod:`bayescal.inference._multi_position_posterior`), g_local drawn from its prior for each
+draw."""
 
-import math
 from dataclasses import dataclass
 
-import jax.numpy as jnp
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import HealthCheckError, InputError
 from ..classical._gravity import LocalGravity
 from ..classical._multi_position import (
@@ -22,90 +21,20 @@ from ..classical._multi_position import (
     find_poses,
     pose_shortfall,
 )
-from ..inference._mcmc import (
-    Diagnostics,
-    batch_log_density,
-    diagnose,
-    sample_ensemble,
-    walker_count,
-)
-from ..inference._optimize import maximum_a_posteriori
-from ..models._multi_position import MultiPositionProblem, multi_position_problem
+from ..inference._mcmc import summarize
+from ..inference._multi_position_posterior import BayesianCalibration, bayesian_multi_position
+from ..inference._sampler import Sampler, sampler_of
+from ..recording._inputs import channel_input
+from ..recording._recording import Channel
 from ..recording._sections import MIN_DURATION_S
+from ..recording._units import parse_unit
 
 
-@dataclass(frozen=True)
-class BayesianCalibration:
-    names: tuple[str, ...]
-    """The calibration parameters, then pose_scatter and g_local."""
-    draws: dict
-    """name -> (walkers, draws) posterior draws."""
-    map_values: dict
-    map_sd: dict
-    """Laplace (Hessian) standard deviations at the MAP, by the delta method, gravity's
-    uncertainty included in the scales and the pose scatter."""
-    diagnostics: Diagnostics
-
-
-def bayesian_multi_position(
-    poses: Poses,
-    classical: ClassicalCalibration,
-    *,
-    seed: int = 0,
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
-    progress: bool = False,
-) -> BayesianCalibration:
-    """Posterior of the calibration parameters, the pose scatter sigma_p (m/s^2) and g_local,
-    with its MAP and health checks. The same inputs and ``seed`` give the same result."""
-    problem = multi_position_problem(poses, classical)
-    gravity = classical.gravity
-    names = (*classical.names, "pose_scatter")
-    n_calibration = len(classical.names)
-    rng = np.random.default_rng(seed)
-    mode = maximum_a_posteriori(
-        MultiPositionProblem.log_posterior, problem, jnp.zeros_like(problem.location)
-    )
-    best, map_converged, covariance = mode.theta, mode.converged, mode.covariance
-    sampler, converged = sample_ensemble(
-        batch_log_density(MultiPositionProblem.log_posterior, problem),
-        np.asarray(best),
-        covariance,
-        rng,
-        walker_count(len(names), n_walkers),
-        max_steps,
-        progress,
-    )
-    diagnostics, kept = diagnose(sampler, names, converged, bool(map_converged))
-    u = np.asarray(problem.location) + np.asarray(problem.step) * kept
-    g = gravity.value + gravity.uncertainty * rng.standard_normal(u.shape[:-1])
-
-    def physical(u, g):
-        """Calibration parameters, pose scatter and g from coordinates u in units of g."""
-        values = np.concatenate(
-            [g[..., None] * np.exp(u[..., :3]), u[..., 3:n_calibration]], axis=-1
-        )
-        scatter = g * np.exp(u[..., n_calibration])
-        return {
-            **{name: values[..., i] for i, name in enumerate(classical.names)},
-            "pose_scatter": scatter,
-            "g_local": g,
-        }
-
-    draws = physical(u, g)
-    u_map = np.asarray(problem.location) + np.asarray(problem.step) * np.asarray(best)
-    map_values = {
-        name: float(value) for name, value in physical(u_map, np.asarray(gravity.value)).items()
-    }
-    u_sd = np.asarray(problem.step) * np.sqrt(np.maximum(np.diag(covariance), 0.0))
-    relative_g = gravity.uncertainty / gravity.value
-    map_sd = {"g_local": gravity.uncertainty}
-    for i, name in enumerate(names):
-        if i < 3 or name == "pose_scatter":
-            map_sd[name] = map_values[name] * math.hypot(u_sd[i], relative_g)
-        else:
-            map_sd[name] = float(u_sd[i])
-    return BayesianCalibration((*names, "g_local"), draws, map_values, map_sd, diagnostics)
+def scale_unit(unit: str) -> str:
+    """The unit of a scale for readings in ``unit``: m/s^2 per it (1 when it is m/s^2)."""
+    if parse_unit(unit).name == "m/s^2":
+        return "1"
+    return f"m/s^2/({unit})" if "/" in unit else f"m/s^2/{unit}"
 
 
 @dataclass(frozen=True)
@@ -128,6 +57,49 @@ class MultiPositionCalibration:
     bayesian: BayesianCalibration | None
     """The posterior (draws, MAP with Laplace sd, sampler checks); None with
     ``bayesian=False``."""
+
+    @property
+    def units(self) -> dict:
+        """parameter -> its unit: scales in m/s^2 per reading unit (1 for readings in
+        m/s^2), offsets in the readings' unit, angles in rad, the pose scatter and g_local
+        in m/s^2."""
+        units = {"pose_scatter": "m/s^2", "g_local": "m/s^2"}
+        for name in self.classical.names:
+            if name.startswith("scale_"):
+                units[name] = scale_unit(self.unit)
+            elif name.startswith("offset_"):
+                units[name] = self.unit
+            else:
+                units[name] = "rad"
+        return units
+
+    @property
+    def summary(self) -> dict:
+        """parameter -> ``{mean, sd, q05, q95, map, map_sd, unit}`` from the posterior (its
+        90 % interval, and the MAP with its Laplace sd): the scales, misalignment angles and
+        offsets, the pose scatter and g_local; with ``bayesian=False``, the classical least
+        squares instead, ``{value, half_width, confidence, unit}``."""
+        units = self.units
+        if self.bayesian is None:
+            return {
+                name: {
+                    "value": value,
+                    "half_width": half_width,
+                    "confidence": self.classical.confidence,
+                    "unit": units[name],
+                }
+                for name, (value, half_width) in self.classical.parameters.items()
+            }
+        posterior = self.bayesian
+        return {
+            name: summarize(
+                posterior.draws[name],
+                units[name],
+                posterior.map_values[name],
+                posterior.map_sd[name],
+            )
+            for name in posterior.names
+        }
 
     @property
     def passed(self) -> bool:
@@ -161,34 +133,39 @@ def calibrate_multi_position(
     rate_hz: float | None = None,
     *,
     gravity: LocalGravity,
-    unit: str = "m/s^2",
+    unit: str | None = None,
     orientations: str = "free",
     sections: list[tuple[float, float]] | None = None,
     min_still_s: float = MIN_DURATION_S,
-    start_s: float = 0.0,
+    start_s: float | None = None,
     confidence: float = 0.95,
     bayesian: bool = True,
     seed: int = 0,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> MultiPositionCalibration:
     """Scale, offset and misalignment of a three-axis accelerometer from still poses.
 
     Parameters
     ----------
-    values : array_like (samples, 3), or Poses
-        The x, y and z readings on one grid (``unit``: m/s^2, g, or counts such as LSB), or
-        the still poses already found (:class:`~bayescal.Poses`, e.g. from
-        :meth:`Poses.from_samples`).
+    values : array_like (samples, 3), three Channels, or Poses
+        The x, y and z readings on one grid (``unit``: m/s^2, g, or counts such as LSB), as
+        one array or as the three axes' :class:`~bayescal.Channel` (which bring their rate,
+        unit and start), or the still poses already found (:class:`~bayescal.Poses`, e.g.
+        from :meth:`Poses.from_samples`).
     rate_hz : float
-        Sample rate, Hz (readings only).
+        Sample rate, Hz (readings only; from the channels when they are Channels).
     gravity : LocalGravity
         Local gravity.
+    unit : str, optional
+        The readings' unit (the Channels' own, else m/s^2).
     orientations : "free" or "six-face"
         Any orientations, gravity's magnitude only (imu_tk; 10 or more poses in 9 or more
         orientations), or each pose on a face of a cube (Ferraris; every face at least once).
     sections : list of (start, stop), optional
         The still poses in seconds from ``start_s`` (default: found, each still for at least
         ``min_still_s``).
+    start_s : float, optional
+        Time of the first reading, s (the Channels' start, else 0).
     min_still_s : float
         The shortest stillness (s) that counts as a pose when the poses are found; too few
         found poses are listed in the error, with a shorter minimum that finds enough.
@@ -198,6 +175,8 @@ def calibrate_multi_position(
         Also the posterior (else the classical answer only).
     seed : int
         The same inputs and seed give the same posterior.
+    sampler : Sampler
+        How the posterior is sampled (:class:`~bayescal.Sampler`).
 
     Returns
     -------
@@ -207,11 +186,12 @@ def calibrate_multi_position(
     ------
     InputError
         Too few poses or orientations, a moving section, a unit that does not fit gravity,
-        poses that do not determine the calibration.
+        poses that do not determine the calibration, Channels not on one grid.
     """
+    values, rate_hz, unit, start_s = _readings(values, rate_hz, unit, start_s)
     if orientations not in ORIENTATIONS:
         raise InputError(
-            f"--orientations {orientations!r} is not known", fix="choose free or six-face"
+            f"orientations={orientations!r} is not known", fix="choose 'free' or 'six-face'"
         )
     if isinstance(values, Poses):
         poses, found_by = values, "given as poses"
@@ -229,7 +209,7 @@ def calibrate_multi_position(
         poses, gravity, orientations=orientations, confidence=confidence
     )
     posterior = (
-        bayesian_multi_position(poses, classical, seed=seed, progress=progress)
+        bayesian_multi_position(poses, classical, seed=seed, sampler=sampler_of(sampler))
         if bayesian
         else None
     )
@@ -255,7 +235,7 @@ def _check_found_enough(values, rate_hz, poses, start_s, unit, orientations, min
             continue
         if pose_shortfall(found, orientations) is None:
             fix = (
-                f"--min-still {shorter:g} finds {found.n} poses in "
+                f"min_still_s={shorter:g} finds {found.n} poses in "
                 f"{distinct_orientations(found)} orientations; or {fix}"
             )
             break
@@ -275,8 +255,39 @@ def _poses(values, rate_hz, sections, start_s, unit, min_still_s) -> Poses:
     if sections is None and np.isnan(values).any():
         raise InputError(
             "still poses cannot be found across gaps or dropped samples",
-            fix="give the poses with --sections",
+            fix="give the poses with sections=",
         )
     return find_poses(
         values, rate_hz, sections=sections, start_s=start_s, unit=unit, min_duration_s=min_still_s
     )
+
+
+def _readings(values, rate_hz, unit, start_s):
+    """(readings, rate, unit, start) from what was given: an array (with ``rate_hz``), Poses,
+    or the three axes' Channels, which must lie on one grid in one unit."""
+    channels = isinstance(values, (list, tuple)) and any(isinstance(v, Channel) for v in values)
+    if not channels:
+        return values, rate_hz, unit or "m/s^2", 0.0 if start_s is None else start_s
+    if len(values) != 3 or not all(isinstance(v, Channel) for v in values):
+        raise InputError(
+            f"values: {len(values)} item(s); give the three axes' Channels (x, y, z) or one "
+            "(samples, 3) array"
+        )
+    axes = [channel_input(v, rate_hz, unit=unit, channel=None, argument="values") for v in values]
+    grids = {
+        (a.rate_hz, a.unit, np.shape(a.values)[0], v.start_s)
+        for a, v in zip(axes, values, strict=True)
+    }
+    if len(grids) > 1:
+        described = "; ".join(
+            f"{a.channel}: {np.shape(a.values)[0]} samples at {a.rate_hz:g} Hz in {a.unit} from "
+            f"{v.start_s:g} s"
+            for a, v in zip(axes, values, strict=True)
+        )
+        raise InputError(
+            f"values: the three Channels are not on one grid ({described})",
+            fix="prepare the three axes alike, from one recording",
+        )
+    readings = np.column_stack([np.asarray(a.values, dtype=float) for a in axes])
+    first = values[0].start_s if start_s is None else start_s
+    return readings, axes[0].rate_hz, axes[0].unit, first

@@ -13,6 +13,7 @@ from ..classical._noise import ClassicalNoise, classical_noise
 from ..inference._checks import noise_model_checker
 from ..inference._noise_posterior import NoisePosterior, sample_noise
 from ..inference._priors import card_prior, default_prior
+from ..inference._sampler import Sampler, sampler_of
 from ..inference._selection import TermSelection, select_noise_terms
 from ..models._noise_problem import NoiseProblem, noise_summaries
 from ..models._terms import (
@@ -24,6 +25,7 @@ from ..models._terms import (
     parameter_unit,
     parse_terms,
 )
+from ..recording._inputs import channel_input
 from ..recording._levels import discrete_step
 from ..recording._sensor_cards import SensorCard, find_card
 
@@ -161,28 +163,6 @@ class NoiseFit:
         return self
 
 
-def _as_channel(y, rate_hz, unit, channel):
-    """(values, rate, unit, channel name, source, notes) from an array or a Channel."""
-    if hasattr(y, "values") and hasattr(y, "rate_hz"):
-        if rate_hz is not None and abs(rate_hz / y.rate_hz - 1) > 1e-9:
-            raise InputError(
-                f"rate_hz={rate_hz} but the channel {y.channel} is sampled at {y.rate_hz:g} Hz",
-                fix="leave rate_hz out for a Channel",
-            )
-        if unit is not None and unit != y.unit:
-            raise InputError(
-                f"unit={unit!r} but the channel {y.channel} is in {y.unit}",
-                fix="leave unit out for a Channel, or prepare it with that unit",
-            )
-        return y.values, y.rate_hz, y.unit, y.channel, y.source, y.notes
-    if rate_hz is None or not rate_hz > 0:
-        raise InputError(f"rate_hz={rate_hz!r} must be a positive sample rate in Hz")
-    values = np.asarray(y, dtype=float)
-    if values.ndim != 1:
-        raise InputError(f"y: one channel, a 1-D array (shape {values.shape})")
-    return values, float(rate_hz), unit or "unit", channel, "<array>", ()
-
-
 def noise_priors(
     terms, classical: ClassicalNoise, unit: str, sensor: SensorCard | str | None, fallback: bool
 ) -> tuple[Callable, tuple[str, ...]]:
@@ -228,9 +208,7 @@ def noise_posterior(
     level_values: np.ndarray | None = None,
     allan=None,
     seed: int = 0,
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> NoisePosteriorFit:
     """The posterior of the noise model of ``values`` (NaN: a gap), with its terms chosen by
     evidence among the models that fit when ``terms`` is ``"auto"`` and the grid the samples
@@ -251,7 +229,12 @@ def noise_posterior(
         terms = selection.terms
     problem = NoiseProblem(spectral, level, prior_of(terms), lsb=np.asarray(lsb))
     fit = sample_noise(
-        problem, terms=terms, seed=seed, n_walkers=n_walkers, max_steps=max_steps, progress=progress
+        problem,
+        terms=terms,
+        seed=seed,
+        n_walkers=sampler.n_walkers,
+        max_steps=sampler.max_steps,
+        progress=sampler.progress,
     )
     return NoisePosteriorFit(fit, selection, lsb, tuple(checker(fit.model_at_map())))
 
@@ -264,13 +247,11 @@ def fit_noise(
     sensor: str | SensorCard | None = None,
     seed: int = 0,
     unit: str | None = None,
-    channel: str = "channel",
+    channel: str | None = None,
     confidence: float = 0.95,
     taus="octave",
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
+    sampler: Sampler = Sampler(),
     sensor_fallback: bool = False,
-    progress: bool = False,
 ) -> NoiseFit:
     """The noise of a static channel: classical numbers and the posterior of the noise model.
 
@@ -296,13 +277,17 @@ def fit_noise(
         The same inputs and seed give the same posterior.
     unit : str, optional
         The channel's unit (deg/s, m/s^2 ...); parameters are reported in units derived from
-        it (IEEE Std 952: N in unit/√Hz, B in unit, K in unit·√Hz ...).
+        it (IEEE Std 952: N in unit/√Hz, B in unit, K in unit·√Hz ...). A Channel brings
+        its own.
+    channel : str, optional
+        The channel's name, for the result (a Channel's own, else ``"channel"``).
     confidence : float
         Confidence of the classical intervals.
     taus : str, int or array
         Averaging times of the classical Allan deviation (:func:`~bayescal.allan_deviation`).
-    n_walkers, max_steps : int
-        emcee walkers, and the most steps before the convergence check fails.
+    sampler : Sampler
+        How the posterior is sampled (walkers, most steps, a progress bar):
+        :class:`~bayescal.Sampler`.
     sensor_fallback : bool
         When the card says nothing of this kind of channel (or of the fitted terms), use the
         weakly informative prior and say so in ``notes`` instead of raising.
@@ -328,16 +313,17 @@ def fit_noise(
     >>> fit.summary["N"]["unit"]
     'deg/s/sqrt(Hz)'
     """
-    values, rate_hz, unit, channel, source, notes = _as_channel(y, rate_hz, unit, channel)
+    data = channel_input(y, rate_hz, unit=unit, channel=channel)
+    values, rate_hz, unit, channel = data.values, data.rate_hz, data.unit, data.channel
     terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
     try:
         classical = classical_noise(
             values, rate_hz, confidence=confidence, taus=taus, readings=READINGS
         )
     except InputError as error:
-        if source == "<array>":
+        if data.source == "<array>":
             raise
-        raise InputError(error.problem, source=source, column=channel, fix=error.fix) from None
+        raise InputError(error.problem, source=data.source, column=channel, fix=error.fix) from None
     family = ("white", *CANDIDATE_TERMS) if terms == AUTO else terms
     prior_of, prior_notes = noise_priors(family, classical, unit, sensor, sensor_fallback)
     posterior = noise_posterior(
@@ -349,9 +335,7 @@ def fit_noise(
         # The classical Allan deviation at octave taus is the one the checks read: not again.
         allan=classical.allan if isinstance(taus, str) and taus == "octave" else None,
         seed=seed,
-        n_walkers=n_walkers,
-        max_steps=max_steps,
-        progress=progress,
+        sampler=sampler_of(sampler),
     )
     return NoiseFit(
         channel=channel,
@@ -362,6 +346,6 @@ def fit_noise(
         checks=posterior.checks,
         selection=posterior.selection,
         lsb=posterior.lsb,
-        source=source,
-        notes=(*notes, *prior_notes),
+        source=data.source,
+        notes=(*data.notes, *prior_notes),
     )

@@ -17,201 +17,33 @@ a drift since then*: ``drift="auto"`` (default) learns its scale from the alignm
 number fixes it (in the channel's unit: about how far the bias may have moved at T0), 0 assumes
 nothing has changed. An updated calibration adds ``drift`` (the scale used or learned, with its
 90 % interval) and ``offsets`` (the period offsets); both are optional keys of schema version 1.
+
+A calibration is made by :func:`~bayescal.fit_thermal` (:mod:`._thermal_fit`); its posterior is
+:mod:`bayescal.inference._thermal_posterior`, its file's schema :mod:`._thermal_file`.
 """
 
 import datetime
-import json
-import math
 from dataclasses import dataclass, field, replace
 from importlib.metadata import version
 from pathlib import Path
 
-import equinox as eqx
-import jax
-import jax.numpy as jnp
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import HealthCheckError, InputError
 from .._output import to_jsonable, write_json
-from ..classical._allan import allan_deviation
-from ..classical._thermal import classical_thermal
-from ..inference._mcmc import batch_log_density, diagnose, sample_ensemble, walker_count
-from ..inference._optimize import maximum_a_posteriori
-from ..inference._priors import default_prior
-from ..models._noise_problem import NoisePrior
-from ..models._terms import (
-    AUTO,
-    PARAMETERS,
-    TERMS,
-    check_terms,
-    parameter_unit,
-    parse_terms,
-    term_parameters,
-)
-from ..models._thermal import (
-    MAX_DEGREE,
-    ThermalProblem,
-    ThermalRecord,
-    _blocks,
-    _identified_from,
-    check_temperature,
-    prequential_score,
-    record_spectrum,
-    thermal_problem,
-)
+from ..inference._sampler import Sampler, sampler_of
+from ..inference._thermal_posterior import ThermalFit, calibrated_noise_prior, sample_thermal
+from ..models._terms import parameter_unit
+from ..models._thermal import ThermalRecord, thermal_problem
 from ..models.effects._parameter import Context
-from ..models.effects.earth_rotation import earth_rate_on_axis
-from ..recording._units import parse_unit
-
-SCHEMA = "bayescal.thermal_calibration"
-SCHEMA_VERSION = 1
-NOISE_TERMS = ("white", "bias_instability", "rate_random_walk")
-
-
-@eqx.filter_jit
-def _draw_regression(problem: ThermalProblem, theta, key):
-    """For each noise draw, a draw of the regression from its Gaussian conditional; also the
-    conditional means and covariances, whose mixture is the posterior."""
-
-    def one(theta_one, key_one):
-        precision, mean, _, _ = problem.conditional(theta_one)
-        covariance = jnp.linalg.inv(precision)
-        draw = mean + jnp.linalg.cholesky(covariance) @ jax.random.normal(key_one, mean.shape)
-        return draw, mean, covariance
-
-    keys = jax.random.split(key, theta.shape[0])
-    return jax.vmap(one)(theta, keys)
-
-
-@dataclass(frozen=True)
-class ThermalFit:
-    """Posterior of the thermal coefficients c_0..c_d (and period offsets) and the noise."""
-
-    degree: int
-    reference: float
-    coefficient_mean: np.ndarray
-    coefficient_covariance: np.ndarray
-    coefficient_draws: np.ndarray
-    """(draws, d + 1)"""
-    offset_mean: np.ndarray
-    offset_sd: np.ndarray
-    noise: dict
-    """noise parameter -> (mean, q05, q95) in the channel's units"""
-    map_coefficients: np.ndarray
-    map_covariance: np.ndarray
-    """Conditional covariance of the coefficients at the MAP noise (the Laplace answer)."""
-    diagnostics: object
-    degree_scores: dict
-    """degree -> (elpd, se of the difference to the best) when the degree was chosen"""
-    drift: tuple[float, float, float] | None = None
-    """Learned drift scale s since the prior calibration: (mean, q05, q95), channel units."""
-
-
-def sample_thermal(
-    problem: ThermalProblem,
-    degree: int,
-    reference: float,
-    *,
-    seed: int,
-    max_steps: int = 40_000,
-    progress: bool = False,
-    degree_scores: dict | None = None,
-) -> ThermalFit:
-    """MAP and Laplace for the noise, emcee posterior, regression draws; checked."""
-    mode = maximum_a_posteriori(ThermalProblem.log_posterior, problem, problem.location)
-    best, converged = mode.theta, mode.converged
-    start, covariance = mode.theta, mode.covariance
-    rng = np.random.default_rng(seed)
-    sampler, done = sample_ensemble(
-        batch_log_density(ThermalProblem.log_posterior, problem),
-        start,
-        covariance,
-        rng,
-        walker_count(start.size),
-        max_steps,
-        progress,
-    )
-    names = problem.parameters
-    diagnostics, kept = diagnose(sampler, names, done, bool(converged))
-    flat_theta = kept.reshape(-1, kept.shape[-1])
-    draws, means, covariances = (
-        np.asarray(x)
-        for x in _draw_regression(
-            problem, jnp.asarray(flat_theta), jax.random.PRNGKey(int(rng.integers(2**31)))
-        )
-    )
-    # The posterior of the regression is the mixture of its conditionals over the noise draws.
-    mean = means.mean(axis=0)
-    covariance_total = covariances.mean(axis=0) + np.cov(means.T, bias=True).reshape(
-        covariances.shape[1:]
-    )
-    coefficients = slice(0, degree + 1)
-    precision_map, mean_map, _, _ = problem.conditional(best)
-    map_covariance = np.linalg.inv(np.asarray(precision_map))
-    natural = {
-        name: np.asarray(value) for name, value in problem.natural(jnp.asarray(flat_theta)).items()
-    }
-    drift = None
-    if problem.learns_drift:
-        scale = np.asarray(problem.drift(jnp.asarray(flat_theta)))
-        drift = tuple(float(x) for x in (scale.mean(), *np.quantile(scale, [0.05, 0.95])))
-    return ThermalFit(
-        degree=degree,
-        reference=reference,
-        coefficient_mean=mean[coefficients],
-        coefficient_covariance=covariance_total[coefficients, coefficients],
-        coefficient_draws=draws[:, coefficients],
-        offset_mean=mean[degree + 1 :],
-        offset_sd=np.sqrt(np.diag(covariance_total)[degree + 1 :]),
-        noise={
-            name: (float(v.mean()), float(np.quantile(v, 0.05)), float(np.quantile(v, 0.95)))
-            for name, v in natural.items()
-        },
-        map_coefficients=np.asarray(mean_map)[coefficients],
-        map_covariance=map_covariance[coefficients, coefficients],
-        diagnostics=diagnostics,
-        degree_scores=degree_scores or {},
-        drift=drift,
-    )
-
-
-def choose_degree(
-    record: ThermalRecord, reference: float, *, noise_prior: NoisePrior
-) -> tuple[int, dict]:
-    """The lowest degree whose prequential ELPD is within max(4, 2 SE) of the best. Under the
-    flat prior a degree has a predictive only once the blocks so far identify its
-    coefficients: scoring starts where every candidate is identified, and a degree the first
-    half of the blocks cannot identify is no candidate (absent from the table)."""
-    blocks = _blocks(record)[0].size
-    spectral = record_spectrum(record, noise_prior.terms)
-    problems = {}
-    for degree in range(MAX_DEGREE + 1):
-        problem = thermal_problem(
-            record, degree, reference, noise_prior=noise_prior, spectral=spectral
-        )
-        if _identified_from(problem.design) > blocks // 2:
-            break
-        problems[degree] = problem
-    skip = max(
-        MAX_DEGREE + 2,
-        math.ceil(0.1 * blocks),
-        *(_identified_from(problem.design) for problem in problems.values()),
-    )
-    scores = {}
-    for degree, problem in problems.items():
-        mode = maximum_a_posteriori(ThermalProblem.log_posterior, problem, problem.location)
-        scores[degree] = prequential_score(problem, mode.theta, skip)
-    best = max(scores, key=lambda d: scores[d].sum())
-    table = {}
-    for degree, pointwise in scores.items():
-        difference = scores[best] - pointwise
-        table[degree] = (
-            float(pointwise.sum()),
-            float(math.sqrt(difference.size * np.var(difference))),
-        )
-    chosen = min(d for d, (elpd, se) in table.items() if table[best][0] - elpd < max(4.0, 2 * se))
-    return chosen, table
+from ..recording._inputs import (
+    channel_and_temperature,
+    check_same_length,
+    samples,
+    temperature_of,
+)
+from ..recording._recording import Channel
+from ._thermal_file import document_of, fields_of, read_document
 
 
 def _coefficient_units(unit: str, temperature_unit: str, degree: int) -> list[str]:
@@ -220,7 +52,7 @@ def _coefficient_units(unit: str, temperature_unit: str, degree: int) -> list[st
     ]
 
 
-def _provenance(step: str, *, source: str, channel: str, n_samples: int, seed, extra: dict):
+def provenance_step(step: str, *, source: str, channel: str, n_samples: int, seed, extra: dict):
     return {
         "step": step,
         "source": source,
@@ -283,6 +115,31 @@ class ThermalCalibration:
     def coefficient_units(self) -> list[str]:
         """The unit of each coefficient c_j: the channel's unit per temperature unit^j."""
         return _coefficient_units(self.unit, self.temperature_unit, self.degree)
+
+    @property
+    def summary(self) -> dict:
+        """``c0`` .. ``cd`` -> ``{mean, sd, q05, q95, unit}`` (the posterior mean and sd, and
+        the 90 % interval of its draws: None for a calibration that does not carry them),
+        then each noise parameter -> ``{mean, q05, q95, unit}`` and, after an update,
+        ``drift`` as the update used or learned it."""
+        low = self.bayesian.get("coefficient_q05")
+        high = self.bayesian.get("coefficient_q95")
+        summary = {
+            f"c{j}": {
+                "mean": float(self.coefficients[j]),
+                "sd": float(np.sqrt(self.covariance[j, j])),
+                "q05": None if low is None else float(low[j]),
+                "q95": None if high is None else float(high[j]),
+                "unit": unit,
+            }
+            for j, unit in enumerate(self.coefficient_units)
+        }
+        for name, entry in self.noise.items():
+            if name != "terms":
+                summary[name] = {key: entry.get(key) for key in ("mean", "q05", "q95", "unit")}
+        if self.drift is not None:
+            summary["drift"] = dict(self.drift)
+        return summary
 
     @property
     def passed(self) -> bool:
@@ -356,50 +213,74 @@ class ThermalCalibration:
         temperature = np.asarray(temperature, dtype=float)
         return (temperature < low) | (temperature > high)
 
-    def compensate(self, y, temperature) -> tuple[np.ndarray, np.ndarray]:
+    def compensate(self, y, temperature=None) -> tuple[np.ndarray, np.ndarray]:
         """The channel ``y`` less its thermal bias (and the Earth rate, when the calibration
         took it off), with the bias's posterior sd per sample.
 
         Parameters
         ----------
-        y : array_like
+        y : array_like or Channel
             The channel's samples, the calibration's unit.
-        temperature : array_like
-            The temperature at each sample, ``temperature_unit``.
+        temperature : array_like or float, optional
+            The temperature at each sample (or one for all), ``temperature_unit``; default:
+            the temperature a Channel was prepared with.
 
         Returns
         -------
         compensated, sd : numpy.ndarray
             The compensated samples and the sd of the bias taken off each, the channel's
             unit.
+
+        Raises
+        ------
+        InputError
+            A Channel in another unit, no temperature, a temperature series of another
+            length than ``y``.
         """
+        self._check_unit(y)
+        values = samples(y, "y")
+        temperature = temperature_of(y, temperature)
+        if temperature.ndim:
+            check_same_length(("y", values), ("temperature", temperature))
         bias, sd = self.bias(temperature)
         earth = self.earth_rate["value"] if self.earth_rate else 0.0
-        return np.asarray(y, dtype=float) - bias - earth, sd
+        return values - bias - earth, sd
+
+    def _check_unit(self, y) -> None:
+        """A Channel given to this calibration must be in its unit."""
+        if isinstance(y, Channel) and y.unit != self.unit:
+            raise InputError(
+                f"the calibration is in {self.unit} but the channel {y.channel} is in {y.unit}",
+                fix=f"prepare the channel in {self.unit} (Recording.channel(name, "
+                f"unit={self.unit!r}))",
+            )
 
     def update(
         self,
         y,
-        temperature,
-        rate_hz: float,
+        temperature=None,
+        rate_hz: float | None = None,
         *,
         periods: tuple[tuple[int, int], ...] | None = None,
         offsets: list | None = None,
         drift: float | str | None = "auto",
         seed: int = 0,
-        source: str = "<array>",
-        progress: bool = False,
+        source: str | None = None,
+        sampler: Sampler = Sampler(),
     ) -> "ThermalCalibration":
         """The calibration updated with alignment data taken in service.
 
         Parameters
         ----------
-        y, temperature : array_like
-            The channel (its unit) and its temperature, on one sample grid; NaN marks a
-            missing sample. The Earth rate this calibration took off (if any) is taken off
-            ``y`` too.
+        y : array_like or Channel
+            The channel (its unit); NaN marks a missing sample. The Earth rate this
+            calibration took off (if any) is taken off ``y`` too. A
+            :class:`~bayescal.Channel` brings its rate, source and the temperature it was
+            prepared with.
+        temperature : array_like or Channel, optional
+            Its temperature, one value per sample (default: the Channel's).
         rate_hz : float
-            Sample rate, Hz.
+            Sample rate, Hz (from the channel when ``y`` is one).
         periods : tuple of (start, stop), optional
             Sample ranges of the alignment periods (default: the gap-free runs of ``y``).
         offsets : list of (value, uncertainty) or None, optional
@@ -410,42 +291,34 @@ class ThermalCalibration:
             ``"auto"`` learns it, 0 or None assumes no change.
         seed : int
             Seed of the sampler.
+        source : str, optional
+            Where the data come from, for the provenance (a Channel's own, else
+            ``<array>``).
+        sampler : Sampler
+            How the posterior is sampled (:class:`~bayescal.Sampler`).
 
         Returns
         -------
         ThermalCalibration
             The new calibration; its provenance continues this one's.
+
+        Raises
+        ------
+        InputError
+            A Channel in another unit, no temperature, a temperature series of another
+            length than ``y``.
         """
-        values = np.asarray(y, dtype=float)
-        temperature = np.asarray(temperature, dtype=float)
+        self._check_unit(y)
+        gyro, temperature = channel_and_temperature(y, temperature, rate_hz, unit=None)
+        values, rate_hz = np.asarray(gyro.values, dtype=float), gyro.rate_hz
+        source = source or gyro.source
         if self.earth_rate:
             values = values - self.earth_rate["value"]
         periods = periods or gap_free_runs(values)
         offsets = list(offsets) if offsets is not None else [None] * len(periods)
         record = ThermalRecord(values, temperature, rate_hz, tuple(periods))
-        parameters = tuple(
-            name for name in term_parameters(tuple(self.noise["terms"])) if name in self.noise
-        )
-        # The noise as the calibration measured it: normal in each parameter's coordinate
-        # around its posterior mean, with the spread of its 90 % interval.
         context = Context(rate_hz, values.size / rate_hz)
-        location, scale = [], []
-        for name in parameters:
-            mean, low, high = (
-                PARAMETERS[name].coordinate(self.noise[name][key], context)
-                for key in ("mean", "q05", "q95")
-            )
-            location.append(mean)
-            scale.append(max((high - low) / 3.29, 0.01))
-        noise_prior = NoisePrior(
-            np.array(location),
-            np.array(scale),
-            np.asarray(1.0),
-            parameters,
-            # A fixed text: it is a static field of the problem, and a path in it would make
-            # every calibration file compile its own likelihood (the provenance names it).
-            "the noise of the prior calibration",
-        )
+        noise_prior = calibrated_noise_prior(self.noise, context)
         problem = thermal_problem(
             record,
             self.degree,
@@ -456,7 +329,9 @@ class ThermalCalibration:
             drift=drift,
             calibrated_range=self.temperature_range,
         )
-        fit = sample_thermal(problem, self.degree, self.reference, seed=seed, progress=progress)
+        fit = sample_thermal(
+            problem, self.degree, self.reference, seed=seed, sampler=sampler_of(sampler)
+        )
         present = temperature[~np.isnan(temperature)]
         low, high = self.temperature_range
         if drift == "auto":
@@ -472,7 +347,7 @@ class ThermalCalibration:
             value = drift or 0.0
             drift_entry = {"scale": value, "q05": value, "q95": value, "unit": self.unit}
             drift_entry["learned"] = False
-        step = _provenance(
+        step = provenance_step(
             "update",
             source=source,
             channel=self.channel,
@@ -486,7 +361,7 @@ class ThermalCalibration:
             },
         )
         return replace(
-            _from_fit(self, fit),
+            with_posterior(self, fit),
             temperature_range=(min(low, float(present.min())), max(high, float(present.max()))),
             provenance=(*self.provenance, step),
             classical=None,
@@ -504,27 +379,7 @@ class ThermalCalibration:
             covered, the noise model, the Earth rate taken off, the provenance of every step;
             arrays as NumPy arrays, written as lists.
         """
-        document = {
-            "schema": SCHEMA,
-            "schema_version": SCHEMA_VERSION,
-            "channel": self.channel,
-            "unit": self.unit,
-            "temperature_unit": self.temperature_unit,
-            "reference_temperature": self.reference,
-            "degree": self.degree,
-            "coefficients": self.coefficients,
-            "coefficient_units": self.coefficient_units,
-            "covariance": self.covariance,
-            "temperature_range": list(self.temperature_range),
-            "noise": self.noise,
-            "earth_rate": self.earth_rate,
-            "provenance": list(self.provenance),
-            "bayesian": self.bayesian,
-        }
-        for key in ("classical", "offsets", "drift"):
-            if getattr(self, key) is not None:
-                document[key] = getattr(self, key)
-        return to_jsonable(document)
+        return document_of(self)
 
     def save(self, path) -> Path:
         """Write the calibration file (atomically: a failure leaves no partial file).
@@ -569,192 +424,7 @@ class ThermalCalibration:
             schema or schema version; a covariance that is not symmetric positive
             semi-definite.
         """
-        _check_document(document, source)
-        return cls(
-            channel=document["channel"],
-            unit=document["unit"],
-            temperature_unit=document["temperature_unit"],
-            reference=float(document["reference_temperature"]),
-            degree=int(document["degree"]),
-            coefficients=np.asarray(document["coefficients"], dtype=float),
-            covariance=np.asarray(document["covariance"], dtype=float),
-            temperature_range=tuple(float(t) for t in document["temperature_range"]),
-            noise=document["noise"],
-            earth_rate=document.get("earth_rate"),
-            provenance=tuple(document["provenance"]),
-            bayesian=document.get("bayesian") or {},
-            classical=document.get("classical"),
-            offsets=document.get("offsets"),
-            drift=document.get("drift"),
-        )
-
-
-_FIX = "give a file written by bayescal thermal fit (or repair that field)"
-
-
-def _field_error(source: str, name: str, problem: str) -> InputError:
-    return InputError(f"field '{name}' {problem}", source=source, fix=_FIX)
-
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-def _finite_number(document: dict, name: str, source: str) -> float:
-    value = document[name]
-    if not _is_number(value) or not math.isfinite(value):
-        raise _field_error(source, name, f"must be a finite number, not {value!r}")
-    return float(value)
-
-
-def _numbers(value, shape: tuple[int, ...], name: str, source: str) -> np.ndarray:
-    """``value`` as a finite float array of ``shape``, or an error naming the field."""
-
-    def numbers_only(item) -> bool:
-        if isinstance(item, list):
-            return all(numbers_only(element) for element in item)
-        return _is_number(item)
-
-    if not numbers_only(value):
-        raise _field_error(source, name, f"must hold numbers only, not {value!r:.60}")
-    try:
-        array = np.asarray(value, dtype=float)
-    except ValueError:  # ragged rows
-        array = np.zeros(0)
-    if array.shape != shape:
-        raise _field_error(
-            source, name, f"must hold {' x '.join(map(str, shape))} numbers, not {value!r:.60}"
-        )
-    if not np.all(np.isfinite(array)):
-        raise _field_error(source, name, "holds a value that is not finite (NaN or inf)")
-    return array
-
-
-def _check_noise(noise, source: str) -> None:
-    if not isinstance(noise, dict):
-        raise _field_error(source, "noise", "must be an object")
-    terms = noise.get("terms")
-    if not isinstance(terms, list) or not all(isinstance(term, str) for term in terms):
-        raise _field_error(source, "noise.terms", "must be a list of noise term names")
-    known = [name for name in term_parameters(_known_terms(terms, source)) if name in noise]
-    for name in known:
-        entry = noise[name]
-        if not isinstance(entry, dict):
-            raise _field_error(source, f"noise.{name}", "must be an object with mean, q05, q95")
-        for key in ("mean", "q05", "q95"):
-            value = entry.get(key)
-            if not _is_number(value) or not math.isfinite(value):
-                raise _field_error(
-                    source, f"noise.{name}.{key}", f"must be a finite number, not {value!r}"
-                )
-            low, high = _free_bounds(name)
-            if not low < value < high:
-                raise _field_error(
-                    source, f"noise.{name}.{key}", f"must lie in ({low:g}, {high:g}), not {value!r}"
-                )
-        if not entry["q05"] <= entry["q95"]:
-            raise _field_error(source, f"noise.{name}", "has q05 above q95")
-
-
-def _known_terms(terms: list, source: str) -> tuple[str, ...]:
-    """The noise terms a calibration file names, each checked against the registry."""
-    unknown = [term for term in terms if term not in TERMS]
-    if unknown:
-        raise _field_error(source, "noise.terms", f"names an unknown term {unknown[0]!r}")
-    return tuple(terms)
-
-
-def _free_bounds(name: str) -> tuple[float, float]:
-    """A noise parameter's range where it does not depend on the record (F in (0, 1), a
-    scale positive); the widest range where it does."""
-    parameter = PARAMETERS[name]
-    if isinstance(parameter.span, str):
-        return (0.0 if parameter.link in ("log", "log_logit") else -math.inf), math.inf
-    return parameter.bounds(Context(1.0))
-
-
-def _check_document(document, source: str) -> None:
-    """The schema of a calibration file, field by field (see the module's docstring)."""
-    if not isinstance(document, dict):
-        kind = {list: "a list", type(None): "null", str: "a string", bool: "a boolean"}.get(
-            type(document), "a number"
-        )
-        raise InputError(
-            f"not a bayescal thermal calibration: the file holds {kind}, not an object",
-            source=source,
-            fix="give a file written by bayescal thermal fit",
-        )
-    if document.get("schema") != SCHEMA:
-        raise InputError(
-            f"not a bayescal thermal calibration (schema {document.get('schema')!r})",
-            source=source,
-            fix="give a file written by bayescal thermal fit",
-        )
-    if document.get("schema_version") != SCHEMA_VERSION:
-        raise InputError(
-            f"calibration schema version {document.get('schema_version')!r}; this "
-            f"bayescal reads version {SCHEMA_VERSION}",
-            source=source,
-            fix="refit with this version (bayescal thermal fit)",
-        )
-    required = (
-        "channel",
-        "unit",
-        "temperature_unit",
-        "reference_temperature",
-        "degree",
-        "coefficients",
-        "covariance",
-        "temperature_range",
-        "noise",
-        "provenance",
-    )
-    for name in required:
-        if name not in document:
-            raise _field_error(source, name, "is missing")
-    for name in ("channel", "unit", "temperature_unit"):
-        if not isinstance(document[name], str) or not document[name].strip():
-            raise _field_error(source, name, f"must be a name, not {document[name]!r}")
-    if parse_unit(document["temperature_unit"]).quantity != "temperature":
-        raise _field_error(
-            source,
-            "temperature_unit",
-            f"{document['temperature_unit']!r} is not a temperature unit",
-        )
-    _finite_number(document, "reference_temperature", source)
-    degree = document["degree"]
-    if not isinstance(degree, int) or isinstance(degree, bool) or not 0 <= degree <= MAX_DEGREE:
-        raise _field_error(
-            source, "degree", f"must be a whole number 0..{MAX_DEGREE}, not {degree!r}"
-        )
-    size = degree + 1
-    _numbers(document["coefficients"], (size,), "coefficients", source)
-    covariance = _numbers(document["covariance"], (size, size), "covariance", source)
-    scale = float(np.max(np.abs(covariance))) or 1.0
-    if not np.allclose(covariance, covariance.T, rtol=1e-8, atol=1e-12 * scale):
-        raise _field_error(source, "covariance", "is not symmetric")
-    if np.min(np.linalg.eigvalsh(covariance)) < -1e-9 * scale:
-        raise _field_error(
-            source, "covariance", "is not positive semi-definite (a variance below zero)"
-        )
-    low, high = _numbers(document["temperature_range"], (2,), "temperature_range", source)
-    if low > high:
-        raise _field_error(source, "temperature_range", "must be [lowest, highest]")
-    _check_noise(document["noise"], source)
-    earth = document.get("earth_rate")
-    if earth is not None and (
-        not isinstance(earth, dict)
-        or not _is_number(earth.get("value"))
-        or not math.isfinite(earth["value"])
-    ):
-        raise _field_error(source, "earth_rate", "must be null or an object with a finite value")
-    if not isinstance(document["provenance"], list) or not all(
-        isinstance(step, dict) for step in document["provenance"]
-    ):
-        raise _field_error(source, "provenance", "must be a list of steps (objects)")
-    for name in ("bayesian", "classical", "offsets", "drift"):
-        if document.get(name) is not None and not isinstance(document[name], dict):
-            raise _field_error(source, name, "must be an object (or absent)")
+        return cls(**fields_of(document, source))
 
 
 def gap_free_runs(values: np.ndarray, minimum: int = 16) -> tuple[tuple[int, int], ...]:
@@ -766,7 +436,7 @@ def gap_free_runs(values: np.ndarray, minimum: int = 16) -> tuple[tuple[int, int
     )
 
 
-def _from_fit(base: ThermalCalibration, fit: ThermalFit) -> ThermalCalibration:
+def with_posterior(base: ThermalCalibration, fit: ThermalFit) -> ThermalCalibration:
     """``base`` with the posterior ``fit`` in place of its own."""
     noise = {
         "terms": base.noise["terms"],
@@ -795,141 +465,6 @@ def _from_fit(base: ThermalCalibration, fit: ThermalFit) -> ThermalCalibration:
         bayesian=to_jsonable(bayesian),
         posterior=fit,
     )
-
-
-def fit_thermal(
-    y,
-    temperature,
-    rate_hz: float,
-    *,
-    degree: int | str = "auto",
-    reference: float | None = None,
-    terms=NOISE_TERMS,
-    unit: str = "deg/s",
-    temperature_unit: str = "degC",
-    channel: str = "gyro",
-    latitude: float | None = None,
-    axis: str = "up",
-    confidence: float = 0.95,
-    seed: int = 0,
-    source: str = "<array>",
-    temperature_name: str = "temperature",
-    progress: bool = False,
-) -> ThermalCalibration:
-    """Fit a thermal bias calibration of a gyro channel.
-
-    Parameters
-    ----------
-    y : array_like
-        The gyro channel (``unit``), NaN where a sample is missing.
-    temperature : array_like
-        Its temperature on the same grid (``temperature_unit``); it must change.
-    rate_hz : float
-        Sample rate, Hz.
-    degree : int or "auto"
-        Polynomial degree 0..4, or chosen by one-block-ahead predictive density.
-    reference : float, optional
-        T0 (default: the middle of the temperature range, to 0.1).
-    terms : str or tuple of str
-        Noise terms beside the thermal bias (as :func:`fit_noise`; no ramp: a ramp cannot
-        be told from a thermal drift).
-    unit, temperature_unit, channel : str
-        Units and the channel's name, written into the calibration.
-    latitude : float, optional
-        Take the Earth rate off the channel first (degrees), with ``axis`` the gyro axis's
-        direction (up, down, north, south, east, west, or east,north,up components).
-    confidence : float
-        Confidence of the classical intervals.
-    seed : int
-        Seed of the sampler: the same inputs and seed give the same calibration.
-    source, temperature_name : str
-        Where the data come from, for the provenance and the messages.
-
-    Returns
-    -------
-    ThermalCalibration
-        The calibration, its classical answer and its posterior's checks
-        (:meth:`~ThermalCalibration.check`).
-
-    Raises
-    ------
-    InputError
-        A constant temperature, an unknown term, a ramp among the terms, a degree out of
-        range, too few blocks for the degree.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> import bayescal as bc
-    >>> t = np.arange(2**13) / 10.0
-    >>> temperature = 45 - 20 * np.exp(-t / 400)
-    >>> noise = bc.NoiseModel(rate_hz=10.0, N=0.005).simulate(t.size, seed=1)
-    >>> y = 0.5 + 0.01 * (temperature - 35) + noise
-    >>> calibration = bc.fit_thermal(y, temperature, 10.0, degree=1, reference=35.0)
-    >>> calibration.coefficients.round(2)
-    array([0.5 , 0.01])
-    """
-    noise_terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
-    if noise_terms == AUTO:
-        raise InputError(
-            "--terms auto: a thermal calibration takes its noise terms as given",
-            fix=f"name them (default: {','.join(NOISE_TERMS)})",
-        )
-    if "rate_ramp" in noise_terms:
-        raise InputError("--terms: a ramp cannot be told from a thermal drift; leave it out")
-    if degree != "auto" and not (
-        isinstance(degree, (int, np.integer)) and 0 <= degree <= MAX_DEGREE
-    ):
-        raise InputError(f"--degree {degree!r}", fix=f"give auto or a whole number 0..{MAX_DEGREE}")
-    values = np.asarray(y, dtype=float)
-    temperature = np.asarray(temperature, dtype=float)
-    check_temperature(temperature, source, temperature_name)
-    earth = None
-    if latitude is not None:
-        value = earth_rate_on_axis(latitude, axis, unit)
-        earth = {"latitude_deg": latitude, "axis": axis, "value": value, "unit": unit}
-        values = values - value
-    present = temperature[~np.isnan(temperature)]
-    if reference is None:
-        reference = float(round((present.min() + present.max()) / 2, 1))
-    record = ThermalRecord(values, temperature, rate_hz, ((0, values.size),))
-    allan = allan_deviation(values, rate_hz)
-    noise_prior = default_prior(noise_terms, allan)
-    if degree == "auto":
-        chosen, scores = choose_degree(record, reference, noise_prior=noise_prior)
-    else:
-        chosen, scores = int(degree), {}
-    problem = thermal_problem(record, chosen, reference, noise_prior=noise_prior)
-    fit = sample_thermal(
-        problem, chosen, reference, seed=seed, progress=progress, degree_scores=scores
-    )
-    base = ThermalCalibration(
-        channel=channel,
-        unit=unit,
-        temperature_unit=temperature_unit,
-        reference=reference,
-        degree=chosen,
-        coefficients=fit.coefficient_mean,
-        covariance=fit.coefficient_covariance,
-        temperature_range=(float(present.min()), float(present.max())),
-        noise={"terms": list(noise_terms)},
-        earth_rate=earth,
-        provenance=(
-            _provenance(
-                "fit",
-                source=source,
-                channel=channel,
-                n_samples=int(np.count_nonzero(~np.isnan(values))),
-                seed=seed,
-                extra={"degree_chosen": degree == "auto"},
-            ),
-        ),
-        bayesian={},
-        classical=to_jsonable(
-            classical_thermal(values, temperature, chosen, reference, confidence)
-        ),
-    )
-    return _from_fit(base, fit)
 
 
 def load_thermal_calibration(
@@ -967,28 +502,7 @@ def load_thermal_calibration(
         another channel, unit or temperature unit.
     """
     source = str(path)
-    try:
-        document = json.loads(Path(path).read_text(encoding="utf-8-sig"))
-    except FileNotFoundError:
-        raise InputError("no such calibration file", source=source, fix="check the path") from None
-    except IsADirectoryError:
-        raise InputError(
-            "is a folder, not a calibration file", source=source, fix="check the path"
-        ) from None
-    except PermissionError:
-        raise InputError("cannot be read (permission denied)", source=source) from None
-    except UnicodeDecodeError:
-        raise InputError(
-            "not a JSON calibration file (it is not text)",
-            source=source,
-            fix="give a file written by bayescal thermal fit",
-        ) from None
-    except json.JSONDecodeError as error:
-        raise InputError(
-            f"not a JSON calibration file: {error}",
-            source=source,
-            fix="give a file written by bayescal thermal fit",
-        ) from None
+    document = read_document(path)
     calibration = replace(ThermalCalibration.from_document(document, source), origin=source)
     if channel is not None and calibration.channel != channel:
         raise InputError(
@@ -1001,7 +515,7 @@ def load_thermal_calibration(
         raise InputError(
             f"the calibration is in {calibration.unit} but the channel is in {unit}",
             source=source,
-            fix="pass --unit to match, or refit in this unit",
+            fix="prepare the channel in its unit, or refit in this unit",
         )
     if temperature_unit is not None and calibration.temperature_unit != temperature_unit:
         raise InputError(

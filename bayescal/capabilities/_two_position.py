@@ -11,16 +11,20 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
-from .._errors import HealthCheckError
+from .._errors import HealthCheckError, InputError
 from ..classical._allan import allan_deviation
 from ..classical._gravity import LocalGravity
 from ..classical._two_position import Section, check_sections, classical_two_position
+from ..inference._mcmc import summarize
 from ..inference._noise_posterior import NoisePosterior
 from ..inference._priors import default_prior
+from ..inference._sampler import Sampler, sampler_of
 from ..inference._selection import TermSelection
 from ..models._level import bias_given_noise, level_summary
 from ..models._terms import DEFAULT_TERMS, check_terms, parse_terms
 from ..models._two_position import offset_drift_variance
+from ..recording._inputs import channel_input, positive_rate
+from ..recording._recording import Channel
 from ._noise import noise_posterior
 
 
@@ -53,7 +57,7 @@ def bayesian_two_position(
     gap_s: float | None,
     unit: str,
     seed: int,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> BayesianTwoPosition:
     """Joint posterior of scale, offset and g_local; ``gap_s`` is the time between the
     starts of the sections when it is known (one file)."""
@@ -66,7 +70,7 @@ def bayesian_two_position(
         unit=unit,
         level_values=up.values,
         seed=seed,
-        progress=progress,
+        sampler=sampler,
     )
     noise, selection, lsb, checks = fitted.posterior, fitted.selection, fitted.lsb, fitted.checks
     rounding = lsb**2 / (12.0 * rate_hz)
@@ -157,6 +161,36 @@ class TwoPositionCalibration:
     model's posterior and fit checks); None with ``bayesian=False``."""
 
     @property
+    def scale_unit(self) -> str:
+        """The scale's unit: m/s^2 per reading unit."""
+        return f"m/s^2/({self.unit})" if "/" in self.unit else f"m/s^2/{self.unit}"
+
+    @property
+    def summary(self) -> dict:
+        """``scale``, ``offset`` and ``g_local``, each ``{mean, sd, q05, q95, map, map_sd,
+        unit}`` from the posterior (its 90 % interval, and the MAP with its Laplace sd); with
+        ``bayesian=False``, the classical answer instead, ``{value, half_width, confidence,
+        unit}``."""
+        units = {"scale": self.scale_unit, "offset": self.unit, "g_local": "m/s^2"}
+        if self.bayesian is None:
+            return {
+                name: {
+                    "value": self.classical[name][0],
+                    "half_width": self.classical[name][1],
+                    "confidence": self.confidence,
+                    "unit": unit,
+                }
+                for name, unit in units.items()
+            }
+        posterior = self.bayesian
+        return {
+            name: summarize(
+                posterior.draws[name], unit, posterior.map_values[name], posterior.map_sd[name]
+            )
+            for name, unit in units.items()
+        }
+
+    @property
     def failures(self) -> tuple[str, ...]:
         """The posterior's failed sampler checks, then where its noise model misfits."""
         if self.bayesian is None:
@@ -195,31 +229,35 @@ class TwoPositionCalibration:
 def calibrate_two_position(
     up,
     down,
-    rate_hz: float,
+    rate_hz: float | None = None,
     *,
     gravity: LocalGravity,
-    unit: str = "m/s^2",
-    channel: str = "acc",
+    unit: str | None = None,
+    channel: str | None = None,
     gap_s: float | None = None,
     terms=DEFAULT_TERMS,
     confidence: float = 0.95,
     bayesian: bool = True,
     seed: int = 0,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> TwoPositionCalibration:
     """Scale factor and offset of one accelerometer axis from a section held up and one held
     down.
 
     Parameters
     ----------
-    up, down : array_like or Section
-        The readings of each section (``unit``; NaN marks a missing sample).
+    up, down : array_like, Section or Channel
+        The readings of each section (``unit``; NaN marks a missing sample); a
+        :class:`~bayescal.Channel` brings its rate, unit, name and where it starts.
     rate_hz : float
-        Sample rate, Hz.
+        Sample rate, Hz (from the channels when ``up`` and ``down`` are Channels).
     gravity : LocalGravity
         Local gravity (:func:`~bayescal.local_gravity`, or :meth:`LocalGravity.measured`).
-    unit : str
-        The readings' unit (m/s^2, g, or a count unit such as LSB).
+    unit : str, optional
+        The readings' unit (m/s^2, g, or a count unit such as LSB; a Channel's own, else
+        m/s^2).
+    channel : str, optional
+        The axis's name, for the result (a Channel's own, else ``acc``).
     gap_s : float, optional
         Seconds between the starts of the two sections when they come from one recording:
         the offset may then drift between them by the noise model's own random walk and
@@ -232,6 +270,8 @@ def calibrate_two_position(
         Also the posterior (else the classical answer only).
     seed : int
         The same inputs and seed give the same posterior.
+    sampler : Sampler
+        How the noise posterior is sampled (:class:`~bayescal.Sampler`).
 
     Returns
     -------
@@ -240,7 +280,8 @@ def calibrate_two_position(
     Raises
     ------
     InputError
-        A moving section, sections not opposite, a span far from 2 g in an acceleration unit.
+        A moving section, sections not opposite, a span far from 2 g in an acceleration unit,
+        Channels of different rates or units.
 
     Examples
     --------
@@ -254,12 +295,7 @@ def calibrate_two_position(
     >>> round(calibration.classical["scale"][0], 3)
     1.002
     """
-    up, down = (
-        section
-        if isinstance(section, Section)
-        else Section(np.asarray(section, float), 0.0, "<array>")
-        for section in (up, down)
-    )
+    up, down, rate_hz, unit, channel = _sections(up, down, rate_hz, unit, channel)
     terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
     check_sections(up, down, unit, channel)
     classical = classical_two_position(up.values, down.values, gravity, confidence)
@@ -273,11 +309,41 @@ def calibrate_two_position(
             gap_s=gap_s,
             unit=unit,
             seed=seed,
-            progress=progress,
+            sampler=sampler_of(sampler),
         )
         if bayesian
         else None
     )
     return TwoPositionCalibration(
         channel, unit, float(rate_hz), up, down, gravity, confidence, classical, posterior
+    )
+
+
+def _sections(up, down, rate_hz, unit, channel):
+    """(up, down, rate, unit, channel name) from the sections given: arrays or Sections (with
+    ``rate_hz``), or Channels, which bring their rate, unit, name, source and start and must
+    agree on the rate and the unit."""
+    sections, rates, units, names = [], [], [], []
+    for name, given in (("up", up), ("down", down)):
+        if isinstance(given, Channel):
+            data = channel_input(given, rate_hz, unit=unit, channel=None, argument=name)
+            sections.append(Section(data.values, given.start_s, data.source))
+            rates.append(data.rate_hz)
+            units.append(data.unit)
+            names.append(data.channel)
+        elif isinstance(given, Section):
+            sections.append(given)
+        else:
+            sections.append(Section(np.asarray(given, float), 0.0, "<array>"))
+    if rates and (len(set(rates)) > 1 or len(set(units)) > 1):
+        raise InputError(
+            f"up and down differ: {rates[0]:g} Hz {units[0]} against {rates[-1]:g} Hz {units[-1]}",
+            fix="record both positions with the same settings",
+        )
+    rate = rates[0] if rates else positive_rate(rate_hz)
+    return (
+        *sections,
+        rate,
+        units[0] if units else unit or "m/s^2",
+        channel or (names[0] if names else "acc"),
     )

@@ -26,6 +26,7 @@ import numba
 import numpy as np
 
 from .._errors import InputError
+from ..recording._inputs import samples_and_rate
 from ..recording._series import (
     SpoolWriter,
     blocks,
@@ -474,7 +475,7 @@ def _memory_lanes(estimator, lanes, rate, taus, kind, noise_type, max_difference
 
 def _deviation(estimator: _Estimator, y, rate, taus, axis, kind, confidence, noise_type, ci_method):
     if not rate > 0:
-        raise InputError(f"rate={rate!r} must be a positive sample rate in Hz")
+        raise InputError(f"rate_hz={rate!r} must be a positive sample rate in Hz")
     if not 0 < confidence < 1:
         raise InputError(f"confidence={confidence!r} must lie between 0 and 1")
     max_differences = 3 if estimator.order == 3 else 2
@@ -535,7 +536,7 @@ def _deviation(estimator: _Estimator, y, rate, taus, axis, kind, confidence, noi
 
 def allan_deviation(
     y,
-    rate: float,
+    rate_hz: float | None = None,
     taus: TauSpec = "octave",
     *,
     axis: int = -1,
@@ -549,11 +550,12 @@ def allan_deviation(
 
     Parameters
     ----------
-    y : array_like
+    y : array_like or Channel
         Rate (frequency-like) samples, e.g. a gyro in deg/s; with ``kind="phase"`` the
         integrated signal (angle) instead. NaN marks a missing sample (rate data only).
-    rate : float
-        Sample rate in Hz; tau = m / rate.
+    rate_hz : float
+        Sample rate in Hz (from the channel when ``y`` is a :class:`~bayescal.Channel`);
+        tau = m / rate_hz.
     taus : "octave", "decade", "all", int or array
         Averaging times; see :func:`averaging_factors`.
     axis : int
@@ -594,12 +596,13 @@ def allan_deviation(
     array([0.0315, 0.0102])
     """
     estimator = _ALLAN if overlapping else _ALLAN_NON_OVERLAPPING
+    y, rate = samples_and_rate(y, rate_hz)
     return _deviation(estimator, y, rate, taus, axis, kind, confidence, noise_type, ci_method)
 
 
 def modified_allan_deviation(
     y,
-    rate: float,
+    rate_hz: float | None = None,
     taus: TauSpec = "octave",
     *,
     axis: int = -1,
@@ -612,10 +615,10 @@ def modified_allan_deviation(
 
     Parameters
     ----------
-    y : array_like
+    y : array_like or Channel
         Rate samples (``kind="phase"``: the integrated signal); NaN marks a missing sample.
-    rate : float
-        Sample rate, Hz.
+    rate_hz : float
+        Sample rate, Hz (from the channel when ``y`` is a :class:`~bayescal.Channel`).
     taus : "octave", "decade", "all", int or array
         Averaging times, s (as :func:`allan_deviation`).
     axis : int
@@ -639,12 +642,13 @@ def modified_allan_deviation(
     InputError
         As :func:`allan_deviation`.
     """
+    y, rate = samples_and_rate(y, rate_hz)
     return _deviation(_MODIFIED, y, rate, taus, axis, kind, confidence, noise_type, ci_method)
 
 
 def hadamard_deviation(
     y,
-    rate: float,
+    rate_hz: float | None = None,
     taus: TauSpec = "octave",
     *,
     axis: int = -1,
@@ -659,10 +663,10 @@ def hadamard_deviation(
 
     Parameters
     ----------
-    y : array_like
+    y : array_like or Channel
         Rate samples (``kind="phase"``: the integrated signal); NaN marks a missing sample.
-    rate : float
-        Sample rate, Hz.
+    rate_hz : float
+        Sample rate, Hz (from the channel when ``y`` is a :class:`~bayescal.Channel`).
     taus : "octave", "decade", "all", int or array
         Averaging times, s (as :func:`allan_deviation`).
     axis : int
@@ -689,4 +693,5 @@ def hadamard_deviation(
         As :func:`allan_deviation`.
     """
     estimator = _HADAMARD if overlapping else _HADAMARD_NON_OVERLAPPING
+    y, rate = samples_and_rate(y, rate_hz)
     return _deviation(estimator, y, rate, taus, axis, kind, confidence, noise_type, ci_method)

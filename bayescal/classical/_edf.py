@@ -18,6 +18,8 @@ import math
 import numpy as np
 from scipy import special
 
+from .._errors import InputError
+
 _LAG1_MIN_POINTS = 30
 # The lag-1 autocorrelation of 2^17 points has a standard error of 0.003, far below what
 # moves the rounded exponent; longer decimated records are cut to this many points.
@@ -370,8 +372,8 @@ def deviation_interval(deviation, edf, confidence: float, method: str = "exact")
 
     Raises
     ------
-    ValueError
-        An unknown ``method``.
+    InputError
+        An unknown ``method``; an ``edf`` that does not broadcast against ``deviation``.
 
     Examples
     --------
@@ -381,7 +383,14 @@ def deviation_interval(deviation, edf, confidence: float, method: str = "exact")
     (0.00879, 0.01161)
     """
     deviation = np.asarray(deviation, dtype=float)
-    edf = np.broadcast_to(np.asarray(edf, dtype=float), deviation.shape)
+    edf = np.asarray(edf, dtype=float)
+    try:
+        edf = np.broadcast_to(edf, deviation.shape)
+    except ValueError:
+        raise InputError(
+            f"edf has shape {edf.shape} but deviation has {deviation.shape}",
+            fix="give one edf per deviation, or one for all",
+        ) from None
     tail = (1.0 - confidence) / 2
     if method == "exact":
         chi_low, chi_high = chi2_quantile(tail, edf), chi2_quantile(1 - tail, edf)
@@ -389,5 +398,5 @@ def deviation_interval(deviation, edf, confidence: float, method: str = "exact")
         quantile = np.vectorize(_chi2_quantile_stable32, otypes=[float])
         chi_low, chi_high = quantile(tail, edf), quantile(1 - tail, edf)
     else:
-        raise ValueError(f"method must be 'exact' or 'stable32', not {method!r}")
+        raise InputError(f"method={method!r} must be 'exact' or 'stable32'")
     return deviation * np.sqrt(edf / chi_high), deviation * np.sqrt(edf / chi_low)

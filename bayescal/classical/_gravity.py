@@ -136,9 +136,9 @@ def local_gravity(latitude_deg: float, height_m: float = 0.0) -> LocalGravity:
     (9.8011, 0.0003)
     """
     if not -90 <= latitude_deg <= 90:
-        raise InputError(f"--latitude {latitude_deg} must lie between -90 and 90 degrees")
+        raise InputError(f"latitude_deg={latitude_deg} must lie between -90 and 90 degrees")
     if not -500 <= height_m <= 20_000:
-        raise InputError(f"--height {height_m} m is outside -500 to 20 000 m above the ellipsoid")
+        raise InputError(f"height_m={height_m} is outside -500 to 20 000 m above the ellipsoid")
     return LocalGravity(
         normal_gravity(latitude_deg, height_m),
         ANOMALY_SD,

@@ -47,6 +47,7 @@ from scipy.spatial.transform import Rotation
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
+from ..recording._inputs import check_same_length
 from ..recording._sections import MIN_DURATION_S, find_static_sections
 from ..recording._units import STANDARD_GRAVITY, parse_unit
 from ._gravity import LocalGravity
@@ -123,9 +124,8 @@ class Poses:
         Raises
         ------
         InputError
-            A pose with fewer than two samples.
-        ValueError
-            An array that is not (samples, 3).
+            A pose with fewer than two samples, an array that is not (samples, 3), a
+            ``start_s`` or ``stop_s`` without one value per pose.
 
         Examples
         --------
@@ -139,9 +139,16 @@ class Poses:
         (2, [9.81, -9.81])
         """
         blocks = [np.asarray(block, dtype=float) for block in samples]
-        for block in blocks:
+        for index, block in enumerate(blocks):
             if block.ndim != 2 or block.shape[1] != 3:
-                raise ValueError("each pose needs a (samples, 3) array")
+                raise InputError(
+                    f"samples[{index}] has shape {block.shape}; each pose needs a (samples, 3) "
+                    "array"
+                )
+        check_same_length(
+            ("samples", blocks),
+            *((name, times) for name, times in (("start_s", start_s), ("stop_s", stop_s))),
+        )
         count = np.array([np.count_nonzero(~np.isnan(block[:, 0])) for block in blocks])
         if np.any(count < 2):
             raise InputError(
@@ -178,7 +185,7 @@ def find_poses(
             raise InputError(
                 "no still poses found: the sensor seems to move throughout",
                 fix=f"hold the sensor still for at least {min_duration_s:g} s in each "
-                "orientation, or give the poses with --sections",
+                "orientation, or give the poses with sections=",
             )
         return Poses.from_samples(
             [values[s.start : s.stop] for s in still],
@@ -192,7 +199,7 @@ def find_poses(
         if np.count_nonzero(~np.isnan(block[:, 0])) < 16:
             raise InputError(
                 f"the section {start:g}-{stop:g} s holds {block.shape[0]} sample(s)",
-                fix="give sections of at least a few seconds inside the record (--sections)",
+                fix="give sections of at least a few seconds inside the record (sections=)",
             )
         blocks.append(block)
     poses = Poses.from_samples(blocks, [s for s, _ in sections], [s for _, s in sections])
@@ -219,7 +226,7 @@ def _check_still(blocks, poses: Poses, unit: str) -> None:
                 f"the section {poses.start_s[index]:g}-{poses.stop_s[index]:g} s is not still: "
                 f"its {AXES[axis]} reading moves by {amount} between its halves "
                 f"({change[axis] / error[axis]:.0f} standard errors)",
-                fix="choose still stretches (--sections) or hold the sensor still",
+                fix="choose still stretches (sections=) or hold the sensor still",
             )
 
 
@@ -242,7 +249,8 @@ def check_unit(poses: Poses, unit: str) -> None:
         raise InputError(
             f"the unit {unit} is a unit of {parsed.quantity.replace('_', ' ')}, not of "
             "acceleration: the three channels must be one accelerometer's",
-            fix="pass --unit m/s^2, g, mg or the sensor's count unit (LSB), and check --channels",
+            fix="pass unit= (m/s^2, g, mg or the sensor's count unit, LSB), and check that the "
+            "three channels are one accelerometer's",
         )
     if parsed.quantity != "acceleration":
         return
@@ -259,7 +267,7 @@ def check_unit(poses: Poses, unit: str) -> None:
     raise InputError(
         f"the still poses read about {magnitude:.4g} {unit} in magnitude, but gravity is "
         f"{expected:.4g} {unit}: {guess}",
-        fix=f"pass --unit {candidates[0]}" if candidates else "check --unit and the columns",
+        fix=f"pass unit={candidates[0]!r}" if candidates else "check unit= and the columns",
     )
 
 
@@ -290,7 +298,7 @@ def assign_faces(poses: Poses) -> tuple[np.ndarray, tuple[str, ...]]:
         raise InputError(
             f"{poses.n} poses cover the faces {', '.join(sorted(set(labels)))} but not "
             f"{', '.join(missing)}: a six-face calibration needs every axis up and down",
-            fix="record the missing faces, or use --orientations free with 10 or more poses",
+            fix='record the missing faces, or use orientations="free" with 10 or more poses',
         )
     faces = np.zeros((poses.n, 3))
     faces[np.arange(poses.n), axis] = sign
@@ -301,7 +309,7 @@ def assign_faces(poses: Poses) -> tuple[np.ndarray, tuple[str, ...]]:
             f"pose {worst + 1} ({_when(poses, worst)}) is {off[worst]:.0f} deg from its nearest "
             f"face ({labels[worst]}); six-face poses must each lie on a face "
             f"(within {FACE_TOLERANCE_DEG:g} deg)",
-            fix="drop that pose with --sections, or use --orientations free",
+            fix='drop that pose with sections=, or use orientations="free"',
         )
     return faces, labels
 
@@ -316,14 +324,14 @@ def pose_shortfall(poses: Poses, orientations: str) -> tuple[str, str] | None:
         return (
             f"found {poses.n} still pose(s); a six-face calibration needs all six",
             "hold the sensor still on each face for a few seconds, or give the poses with "
-            "--sections",
+            "sections=",
         )
     if poses.n < MIN_FREE_POSES:
         return (
             f"found {poses.n} still pose(s); the free model needs at least {MIN_FREE_POSES} "
             "(9 parameters from gravity's magnitude alone)",
             "record more poses in different orientations (12 or more, spread over the "
-            "sphere), or, for a six-face session, pass --orientations six-face",
+            'sphere), or, for a six-face session, pass orientations="six-face"',
         )
     distinct = distinct_orientations(poses)
     if distinct < MIN_FREE_ORIENTATIONS:
@@ -332,7 +340,7 @@ def pose_shortfall(poses: Poses, orientations: str) -> tuple[str, str] | None:
             f"{SAME_ORIENTATION_DEG:g} deg count once); the free model needs at least "
             f"{MIN_FREE_ORIENTATIONS}",
             "record more poses in different orientations, or, for a six-face session, pass "
-            "--orientations six-face",
+            'orientations="six-face"',
         )
     return None
 
@@ -490,7 +498,7 @@ def _linear_six_face(mean: np.ndarray, faces: np.ndarray, g: float) -> np.ndarra
     if np.linalg.det(orthogonal) < 0:
         raise InputError(
             "the three channels form a left-handed frame",
-            fix="check the order and signs of --channels",
+            fix="check the order (x, y, z) and the signs of the three channels",
         )
     free = _from_upper(upper, offsets)
     rotation = Rotation.from_matrix(orthogonal).as_rotvec()
@@ -542,7 +550,7 @@ def classical_multi_position(
     """Least-squares calibration with g fixed at the local value; the poses are checked first
     (count, distinct orientations or faces, conditioning)."""
     if orientations not in ORIENTATIONS:
-        raise InputError(f"--orientations {orientations!r} must be 'free' or 'six-face'")
+        raise InputError(f"orientations={orientations!r} must be 'free' or 'six-face'")
     six_face = orientations == "six-face"
     g = gravity.value
     distinct = distinct_orientations(poses)

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
+from ..recording._inputs import samples_and_rate
 from ..recording._series import finite_moments, is_spooled, series_size
 from ._allan import DeviationResult, allan_deviation
 from ._edf import deviation_interval
@@ -364,18 +365,18 @@ def t_interval_check(allan: DeviationResult, std: float, n_samples: int) -> TInt
 
 
 def classical_noise(
-    y, rate: float, *, confidence: float = 0.95, taus="octave", readings=None
+    y, rate_hz: float | None = None, *, confidence: float = 0.95, taus="octave", readings=None
 ) -> ClassicalNoise:
     """Classical noise summary of one static channel: mean with its Student-t interval and
     whether that holds, the Allan deviation, and the IEEE Std 952 slope readings.
 
     Parameters
     ----------
-    y : array_like or SpooledSeries
+    y : array_like, SpooledSeries or Channel
         The samples, in the channel's unit; NaN marks a missing one. A spooled series (a long
         channel, :func:`stream_channel`) is read in blocks.
-    rate : float
-        Sample rate, Hz.
+    rate_hz : float
+        Sample rate, Hz (from the channel when ``y`` is a :class:`~bayescal.Channel`).
     confidence : float
         Confidence of the intervals.
     taus : "octave", "decade", "all", int or array
@@ -401,6 +402,7 @@ def classical_noise(
     >>> bool(noise.t_interval.valid)
     True
     """
+    y, rate = samples_and_rate(y, rate_hz)
     values = y if is_spooled(y) else np.asarray(y, dtype=float)
     n, mean, squares = finite_moments(values)
     std = math.sqrt(squares / (n - 1)) if n > 1 else math.nan

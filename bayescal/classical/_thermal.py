@@ -47,7 +47,7 @@ def classical_thermal(
         raise InputError(
             f"the temperature range ({span:.3g}) fills only {bins.shape[0]} bins, "
             f"too few for degree {degree}",
-            fix="lower --degree",
+            fix="lower degree=",
         )
     z = stats.norm.ppf(0.5 + confidence / 2)
     weight = 1 / (bins[:, 2] / z) ** 2

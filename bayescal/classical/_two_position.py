@@ -70,7 +70,7 @@ def check_sections(up: Section, down: Section, unit: str, channel: str) -> None:
                 f"between its halves ({change / spread:.0f} standard errors)",
                 source=section.source,
                 column=channel,
-                fix="choose a still stretch (--sections) or hold the sensor still",
+                fix="give a still stretch as the section, or hold the sensor still",
             )
     up_mean, down_mean = np.nanmean(up.values), np.nanmean(down.values)
     span = up_mean - down_mean
@@ -80,7 +80,7 @@ def check_sections(up: Section, down: Section, unit: str, channel: str) -> None:
             f"{unit}; they should be about +g and -g around the offset",
             source=up.source,
             column=channel,
-            fix="check which section is up and which down (--sections)",
+            fix="check which section is up and which down",
         )
     parsed = parse_unit(unit)
     if parsed.quantity == "acceleration":
@@ -91,7 +91,7 @@ def check_sections(up: Section, down: Section, unit: str, channel: str) -> None:
                 "probably wrong",
                 source=up.source,
                 column=channel,
-                fix="check --unit",
+                fix="check unit=",
             )
 
 
@@ -130,7 +130,7 @@ def sections_from_channel(
             )
         except ValueError:
             raise InputError(
-                f"--sections {given!r}",
+                f"sections={given!r}",
                 fix="write UP_START:UP_STOP,DOWN_START:DOWN_STOP in seconds from the first sample",
             ) from None
 
@@ -146,7 +146,7 @@ def sections_from_channel(
             "static sections cannot be found across gaps",
             source=data.source,
             column=data.channel,
-            fix="give them with --sections",
+            fix="give them with sections=",
         )
     still = find_static_sections(
         data.values if accelerometer is None else accelerometer, data.rate_hz
@@ -158,7 +158,7 @@ def sections_from_channel(
             source=data.source,
             column=data.channel,
             fix="hold the sensor still in each position for a few seconds, or "
-            "give the sections with --sections",
+            "give the sections with sections=",
         )
     middle, half = (levels.max() + levels.min()) / 2, (levels.max() - levels.min()) / 2
     chosen = {}

@@ -217,7 +217,10 @@ def add_recording_arguments(
     """The recording and how to read it: the file, its channel(s) (``channel``: "one" for
     ``--channel``, "three" for ``--channels X,Y,Z``, "many" for ``--channels A,B,...``), the
     unit, the time base, gaps; with ``window``, the analysed window (``--start/--stop`` or
-    ``--pad``); with ``temperature``, the temperature column."""
+    ``--pad``); with ``temperature``, the temperature column.
+
+    Over 80 lines: a list of argument declarations, one per option, each with its help.
+    """
     group = parser.add_argument_group("recording")
     group.add_argument(
         "file",
@@ -367,7 +370,7 @@ def grid_options(args, name: str | None = None) -> dict:
     return {
         "unit": unit,
         "scale": factor,
-        "rate": args.rate,
+        "rate_hz": args.rate,
         "time_column": args.time_column,
         "time_unit": args.time_unit,
         "gaps": getattr(args, "gaps", "error"),
@@ -391,7 +394,7 @@ def window(args, recording) -> tuple[float | None, float | None, dict]:
         accel_unit=args.accel_unit,
         time_column=args.time_column,
         time_unit=args.time_unit,
-        rate=args.rate,
+        rate_hz=args.rate,
     )
     return (
         pad.start_s,
@@ -524,6 +527,20 @@ def health_exit(command: str, failures: list[str]) -> int:
 def progress(args) -> bool:
     """A progress bar only on a terminal, and not with --quiet."""
     return not getattr(args, "quiet", False) and sys.stderr.isatty()
+
+
+def sampler(args, *, bar: bool = True):
+    """The :class:`~bayescal.Sampler` of a command: ``--walkers`` and ``--max-steps`` where it
+    has them (else the defaults), and a progress bar as :func:`progress` says (none with
+    ``bar=False``)."""
+    from ..inference._sampler import Sampler
+
+    settings = {"progress": bar and progress(args)}
+    if getattr(args, "walkers", None) is not None:
+        settings["n_walkers"] = args.walkers
+    if getattr(args, "max_steps", None) is not None:
+        settings["max_steps"] = args.max_steps
+    return Sampler(**settings)
 
 
 def parse_sections(text: str, form: str = "START:STOP,START:STOP,...") -> list[tuple[float, float]]:

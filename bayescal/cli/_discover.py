@@ -71,7 +71,7 @@ def _discover(
         accelerometer_unit=units,
         baseline=baseline,
         max_effects=max_effects,
-        progress=progress,
+        log=progress,
         seed=seed,
         posterior=posterior,
     )

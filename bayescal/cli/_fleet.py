@@ -18,8 +18,8 @@ from ._arguments import (
     max_steps,
     positive_float,
     positive_int,
-    progress,
     reading_options,
+    sampler,
     seed,
     unit_and_scale,
     walkers,
@@ -154,7 +154,7 @@ def run(args) -> int:
         seed=args.seed,
         unit=unit,
         scale=scale,
-        rate=args.rate,
+        rate_hz=args.rate,
         time_column=args.time_column,
         time_unit=args.time_unit,
         gaps=args.gaps,
@@ -163,9 +163,7 @@ def run(args) -> int:
         **reading_options(args),
         scheduler=args.scheduler,
         workers=args.workers,
-        n_walkers=args.walkers,
-        max_steps=args.max_steps,
-        progress=progress(args),
+        sampler=sampler(args),
     )
     result = fleet_result(fleet)
     if args.json:

@@ -25,6 +25,7 @@ from . import (
     _thermal,
     _two_position,
 )
+from ._flags import in_flags
 
 INTERNAL_ERROR = 3
 COMMANDS = (
@@ -138,7 +139,8 @@ def main(argv: list[str] | None = None) -> int:
                 raise _RAISED[received[0]]
             return code
     except BayescalError as error:
-        print(f"bayescal {_command(args)}: error: {error}", file=sys.stderr)
+        message = in_flags(str(error), build_parser())  # the library names its arguments
+        print(f"bayescal {_command(args)}: error: {message}", file=sys.stderr)
         return error.exit_code
     except KeyboardInterrupt:
         print(f"bayescal {_command(args)}: interrupted; no output written", file=sys.stderr)

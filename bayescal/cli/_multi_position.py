@@ -15,7 +15,7 @@ from ._arguments import (
     load,
     parse_sections,
     positive_float,
-    progress,
+    sampler,
     seed,
 )
 
@@ -114,7 +114,7 @@ def run(args) -> int:
             confidence=args.confidence,
             bayesian=not args.classical_only,
             seed=args.seed,
-            progress=progress(args),
+            sampler=sampler(args),
         )
     except InputError as error:
         raise InputError(error.problem, source=first.source, fix=error.fix) from None

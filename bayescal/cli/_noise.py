@@ -14,6 +14,7 @@ from ._arguments import (
     max_steps,
     progress,
     require_bayesian_run,
+    sampler,
     seed,
     taus,
     walker_note,
@@ -224,9 +225,7 @@ def run(args) -> int:
             seed=args.seed,
             confidence=args.confidence,
             taus=args.taus,
-            n_walkers=args.walkers,
-            max_steps=args.max_steps,
-            progress=progress(args),
+            sampler=sampler(args),
         )
         classical = fit.classical
     result = noise_result(fit or channel, classical, window, fit)

@@ -14,6 +14,7 @@ from ._arguments import (
     minutes,
     progress,
     require_bayesian_run,
+    sampler,
     seed,
     taus,
     unit_and_scale,
@@ -122,8 +123,7 @@ def run(args) -> int:
         confidence=args.confidence,
         taus=args.taus,
         seed=args.seed,
-        n_walkers=args.walkers,
-        max_steps=args.max_steps,
+        sampler=sampler(args),
         rate=args.rate,
         time_column=args.time_column,
         time_unit=args.time_unit,
@@ -136,7 +136,6 @@ def run(args) -> int:
         },
         window=described,
         discoveries=discoveries,
-        progress=progress(args),
     )
     print(f"bayescal report: {recording.source}")
     print(summary_text(outcome))

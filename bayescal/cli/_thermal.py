@@ -15,8 +15,8 @@ from ._arguments import (
     health_exit,
     latitude,
     load,
-    progress,
     require_bayesian_run,
+    sampler,
     seed,
     unit_and_scale,
 )
@@ -149,7 +149,7 @@ def run_fit(args) -> int:
     channel, column, temperature_in = _channel(args)
     require_bayesian_run(channel)
     # The analysis's modules load once the input is known to be good.
-    from ..capabilities._thermal import fit_thermal
+    from ..capabilities._thermal_fit import fit_thermal
     from ..report._thermal import thermal_text
 
     calibration = fit_thermal(
@@ -168,7 +168,7 @@ def run_fit(args) -> int:
         seed=args.seed,
         source=channel.source,
         temperature_name=column,
-        progress=progress(args),
+        sampler=sampler(args),
     )
     calibration.save(args.json)
     print(thermal_text(calibration.to_document()))
@@ -281,7 +281,7 @@ def run_update(args) -> int:
         drift=drift,
         seed=args.seed,
         source=channel.source,
-        progress=progress(args),
+        sampler=sampler(args),
     )
     updated.save(args.json)
     print(thermal_text(updated.to_document()))

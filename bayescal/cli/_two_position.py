@@ -15,8 +15,8 @@ from ._arguments import (
     latitude,
     load,
     parse_sections,
-    progress,
     require_acceleration,
+    sampler,
     seed,
 )
 
@@ -140,7 +140,7 @@ def run(args) -> int:
         confidence=args.confidence,
         bayesian=not args.classical_only,
         seed=args.seed,
-        progress=progress(args),
+        sampler=sampler(args),
     )
     result = two_position_result(calibration, found_by)
     if args.json:

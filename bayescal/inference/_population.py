@@ -55,8 +55,15 @@ from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
 from ..models._population import PopulationModel
 from ..recording._units import parse_unit
-from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
+from ._mcmc import (
+    Diagnostics,
+    batch_log_density,
+    diagnose,
+    sample_ensemble,
+    walker_count,
+)
 from ._optimize import maximum_a_posteriori
+from ._sampler import Sampler
 
 POPULATION_PARAMETERS = ("N", "B", "K")
 RESOLVED_LOG_SD = 1.0
@@ -125,7 +132,7 @@ class RecordingDraws:
             raise InputError(
                 f"channel {self.channel} is in {self.channel_unit}, the fleet's in {unit}",
                 source=self.source,
-                fix="give every recording the same unit (--unit, or the header)",
+                fix="give every recording the same unit (unit=, or the header)",
             )
         factor = have.to_si / want.to_si
         shift = math.log(factor)
@@ -536,9 +543,7 @@ def sample_population(
     data: FleetData,
     *,
     seed: int = 0,
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> PopulationPosterior:
     """MAP, then emcee over the population's parameters, checked; then each unit's shrunk
     draws, its log-likelihood at every draw and its points' effective number."""
@@ -548,16 +553,16 @@ def sample_population(
     rng = np.random.default_rng(seed)
     start = jnp.asarray(_start(model, own, data))
     mode = maximum_a_posteriori(PopulationModel.log_density, model, start)
-    sampler, converged = sample_ensemble(
+    ensemble, converged = sample_ensemble(
         batch_log_density(PopulationModel.log_density, model),
         mode.theta,
         mode.covariance,
         rng,
-        walker_count(mode.theta.size, n_walkers),
-        max_steps,
-        progress,
+        walker_count(mode.theta.size, sampler.n_walkers),
+        sampler.max_steps,
+        sampler.progress,
     )
-    diagnostics, kept = diagnose(sampler, model.names, converged, mode.converged)
+    diagnostics, kept = diagnose(ensemble, model.names, converged, mode.converged)
     flat = kept.reshape(-1, kept.shape[-1])
     key = jax.random.PRNGKey(int(rng.integers(2**31)))
     pieces = []
@@ -607,22 +612,19 @@ def fit_population(
     parameters,
     *,
     seed: int = 0,
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
 ) -> PopulationPosterior:
     """The population's posterior from its recordings' draws: with MAX_POINTS points per
     unit, and again with every stored draw as a point where a unit's points fall short of
     MIN_POINT_ESS at the posterior's median (module docstring). A unit whose runs disagree
     is not helped by more points; its check stays as it is."""
-    sampling = {"seed": seed, "n_walkers": n_walkers, "max_steps": max_steps}
     data = fleet_data(recordings, parameters, seed=seed)
-    posterior = sample_population(data, progress=progress, **sampling)
+    posterior = sample_population(data, seed=seed, sampler=sampler)
     stored = max(recording.n_draws for recording in recordings)
     if stored <= data.max_points or np.all(posterior.point_ess >= MIN_POINT_ESS):
         return posterior
     data = fleet_data(recordings, parameters, seed=seed, max_points=stored)
-    return sample_population(data, progress=progress, **sampling)
+    return sample_population(data, seed=seed, sampler=sampler)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -207,22 +207,22 @@ def read_mat(path: Path, source: str) -> dict | None:
 def _axes(array: np.ndarray, samples_axis, channels_axis) -> tuple[int, int] | str:
     """The samples and channels axes of an array of two or more axes, or why not."""
     ndim = array.ndim
-    for argument, axis in (("--samples-axis", samples_axis), ("--channels-axis", channels_axis)):
+    for argument, axis in (("samples_axis", samples_axis), ("channels_axis", channels_axis)):
         if axis is not None and not 0 <= axis < ndim:
-            return f"has {ndim} axes (0 .. {ndim - 1}); {argument} {axis} is not one of them"
+            return f"has {ndim} axes (0 .. {ndim - 1}); {argument}={axis} is not one of them"
     if samples_axis is None:
         longest = max(array.shape)
         candidates = [axis for axis, n in enumerate(array.shape) if n == longest]
         if len(candidates) > 1:
             return (
                 f"has axes {' and '.join(map(str, candidates))} of equal length {longest}; "
-                "pass --samples-axis to say which holds the samples"
+                "pass samples_axis= to say which holds the samples"
             )
         samples_axis = candidates[0]
     if channels_axis is None:
         channels_axis = max(axis for axis in range(ndim) if axis != samples_axis)
     if channels_axis == samples_axis:
-        return f"--samples-axis and --channels-axis both name axis {samples_axis}"
+        return f"samples_axis= and channels_axis= both name axis {samples_axis}"
     return samples_axis, channels_axis
 
 
@@ -254,7 +254,7 @@ def array_columns(
                 blocks[name] = (array, *axes)
     if (samples_axis is not None or channels_axis is not None) and not blocks:
         raise InputError(
-            "--samples-axis and --channels-axis choose the axes of an array of two or more "
+            "samples_axis= and channels_axis= choose the axes of an array of two or more "
             "axes, and the file holds none that can be read",
             source=source,
             fix="leave them out",
@@ -263,7 +263,7 @@ def array_columns(
     lengths = [v.size for v in vectors.values()] + [a.shape[s] for a, s, _ in blocks.values()]
     if not lengths:
         for name, (_, why) in undecided.items():
-            unusable[name] = (why, "pass --samples-axis")
+            unusable[name] = (why, "pass samples_axis=")
         listed = "; ".join(f"'{k}' {why}" for k, (why, _) in unusable.items()) or "no variables"
         raise InputError(
             f"no numeric column of samples in the file ({listed})",
@@ -275,7 +275,7 @@ def array_columns(
         short = f"has at most {max(array.shape)} samples where the recording has {length}"
         unusable[name] = (
             short if max(array.shape) < length else tie,
-            "pass --samples-axis / --channels-axis, or save it in its own file",
+            "pass samples_axis= / channels_axis=, or save it in its own file",
         )
     raw: dict[str, np.ndarray] = {}
     for name, vector in vectors.items():
@@ -291,7 +291,7 @@ def array_columns(
             unusable[name] = (
                 f"has {array.shape[samples]} samples (axis {samples}) where the recording "
                 f"has {length}",
-                "choose its samples axis with --samples-axis, or save it in its own file",
+                "choose its samples axis with samples_axis=, or save it in its own file",
             )
             continue
         others = [axis for axis in range(array.ndim) if axis not in (samples, channels)]
@@ -301,10 +301,10 @@ def array_columns(
         labels = named.get(name) or [f"{name}_{i}" for i in range(array.shape[channels])]
         if len(labels) != array.shape[channels]:
             raise InputError(
-                f"--names gives {len(labels)} name(s) for the {array.shape[channels]} "
+                f"names= gives {len(labels)} name(s) for the {array.shape[channels]} "
                 f"channels of '{name}' (axis {channels} of its shape {array.shape})",
                 source=source,
-                fix="name every channel, or choose the axis with --channels-axis",
+                fix="name every channel, or choose the axis with channels_axis=",
             )
         for record in range(records):
             for i, label in enumerate(labels):
@@ -320,16 +320,17 @@ def _names_by_array(names, blocks: dict, source: str) -> dict[str, list[str]]:
         missing = [name for name in names if name not in blocks]
         if missing:
             raise InputError(
-                f"--names {missing[0]}:...: no array of two or more axes named '{missing[0]}'",
+                f"names= names an array '{missing[0]}', and the file holds no array of two or "
+                "more axes of that name",
                 source=source,
                 fix=f"arrays with channels: {', '.join(blocks) or '(none)'}",
             )
         return dict(names)
     if len(blocks) != 1:
         raise InputError(
-            f"--names needs one array of channels to name, and the file holds {len(blocks)}"
+            f"names= needs one array of channels to name, and the file holds {len(blocks)}"
             + (f" ({', '.join(blocks)})" if blocks else ""),
             source=source,
-            fix="say which with --names VAR:a,b,c" if blocks else "leave --names out",
+            fix='say which with names={"VAR": ["a", "b", "c"]}' if blocks else "leave names= out",
         )
     return {next(iter(blocks)): list(names)}

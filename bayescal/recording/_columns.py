@@ -49,7 +49,7 @@ def find_temperature_column(table, given: str | None) -> str:
     raise InputError(
         "no temperature column",
         source=table.source,
-        fix="pass --temperature COL (found by name: temperature, temp, temp_C ...)",
+        fix='pass temperature="COLUMN" (found by name: temperature, temp, temp_C ...)',
     )
 
 

@@ -28,7 +28,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from .._errors import InputError
+from .._errors import InputError, MissingFileError
 
 REQUIRED_COLUMNS = ("path", "unit")
 OPTIONAL_COLUMNS = ("run", "rate", "temperature")
@@ -108,11 +108,15 @@ def read_manifest(path: str | Path) -> Manifest:
     """
     source = str(path)
     manifest_path = Path(path)
-    if not manifest_path.is_file():
-        raise InputError(
-            "no such manifest file" if not manifest_path.exists() else "is not a file",
+    if not manifest_path.exists():
+        raise MissingFileError(
+            "no such manifest file",
             source=source,
             fix="give the CSV that lists the fleet's recordings",
+        )
+    if not manifest_path.is_file():
+        raise InputError(
+            "is not a file", source=source, fix="give the CSV that lists the fleet's recordings"
         )
     try:
         text = manifest_path.read_text(encoding="utf-8-sig")
@@ -162,11 +166,12 @@ def read_manifest(path: str | Path) -> Manifest:
             raise InputError(f"{where}: empty path", source=source, column="path")
         resolved = (folder / values["path"]).resolve()
         if not resolved.exists():
-            raise InputError(
+            raise MissingFileError(
                 f"{where}: no such file '{values['path']}' (looked for {resolved})",
                 source=source,
                 column="path",
                 fix="paths are relative to the manifest's folder",
+                filename=str(resolved),
             )
         if resolved in paths:
             raise InputError(

@@ -65,7 +65,7 @@ def find_pad_window(
     accel_unit: str | None = None,
     time_column: str | None = None,
     time_unit: str | None = None,
-    rate: float | None = None,
+    rate_hz: float | None = None,
 ) -> PadWindow:
     """Locate liftoff and the quiet window before it (seconds from the first sample).
 
@@ -85,7 +85,7 @@ def find_pad_window(
         rest, with a note).
     time_column, time_unit : str, optional
         The time stamps' column and unit (default: ``time`` / ``t`` in seconds).
-    rate : float, optional
+    rate_hz : float, optional
         Sample rate, Hz: take the samples as evenly spaced, ignoring the time stamps.
 
     Returns
@@ -98,16 +98,23 @@ def find_pad_window(
     InputError
         No accelerometer columns, a log that does not start at rest, no liftoff, or less
         than 1 s of quiet pad before it.
+
+    Notes
+    -----
+    One function (over 80 lines) on purpose: its steps — columns, unit, liftoff, the pad level,
+    the quiet stretch — each refine the previous one's result and refuse with their own message,
+    in this order.
     """
     columns = accel_columns or find_accelerometer_columns(table)
     if columns is None:
         raise InputError(
-            "--pad needs the accelerometer, and no x/y/z accelerometer columns were found by name",
+            "a pad window needs the accelerometer, and no x/y/z accelerometer columns were "
+            "found by name",
             source=table.source,
-            fix="pass --accel-columns X,Y,Z",
+            fix='pass accel_columns=("X", "Y", "Z")',
         )
     raw = np.column_stack([table.require(name, "accelerometer column") for name in columns])
-    time, _, notes = seconds_from_start(table, time_column, time_unit, rate, n_rows=raw.shape[0])
+    time, _, notes = seconds_from_start(table, time_column, time_unit, rate_hz, n_rows=raw.shape[0])
     if not np.isfinite(raw).all():
         row = int(np.flatnonzero(~np.isfinite(raw).all(axis=1))[0])
         raise InputError(
@@ -138,7 +145,7 @@ def find_pad_window(
                 f"{level:.4g}, neither about 1 (g) nor 9.8 (m/s^2)",
                 source=table.source,
                 column=columns[0],
-                fix="pass --accel-unit",
+                fix="pass accel_unit=",
             )
         notes.append(
             f"accelerometer unit taken as {'g' if to_g == 1.0 else 'm/s^2'} from its "
@@ -158,7 +165,7 @@ def find_pad_window(
             f"{pad_level:.3f} g in its first second",
             source=table.source,
             column=columns[0],
-            fix="pick the pad window with --start/--stop",
+            fix="pick the pad window with start=/stop=",
         )
 
     period = float(np.median(np.diff(time)))
@@ -172,7 +179,7 @@ def find_pad_window(
             f"{SUSTAIN_S} s",
             source=table.source,
             column=columns[0],
-            fix="use --start/--stop to choose the window",
+            fix="use start=/stop= to choose the window",
         )
     trigger = int(np.flatnonzero(held)[0])
     settled = np.flatnonzero(np.abs(magnitude[:trigger] - pad_level) <= 5 * pad_scatter)
@@ -185,7 +192,7 @@ def find_pad_window(
             f"liftoff at t = {time[onset]:.3f} s leaves no pad data before it",
             source=table.source,
             column=columns[0],
-            fix="use --start/--stop to choose the window",
+            fix="use start=/stop= to choose the window",
         )
     mean = _running_mean(before, width)
     scatter = np.sqrt(np.maximum(_running_mean(before**2, width) - mean**2, 0.0))
@@ -198,7 +205,7 @@ def find_pad_window(
             f"no quiet stretch before liftoff at t = {time[onset]:.3f} s",
             source=table.source,
             column=columns[0],
-            fix="use --start/--stop to choose the window",
+            fix="use start=/stop= to choose the window",
         )
     starts, stops = edges[::2], edges[1::2] - 1 + width
     best = int(np.argmax(stops - starts))
@@ -210,7 +217,7 @@ def find_pad_window(
             f"only {stop_s - start_s:.2f} s (at least {MIN_PAD_S} s is needed)",
             source=table.source,
             column=columns[0],
-            fix="use --start/--stop to choose the window",
+            fix="use start=/stop= to choose the window",
         )
     notes.append(
         f"pad window {start_s:.3f}–{stop_s:.3f} s before liftoff at "

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._errors import InputError
+from .._errors import InputError, MissingFileError
 from ._rosbag import SUFFIXES as ROSBAG_SUFFIXES
 from ._rosbag import read_rosbag
 
@@ -156,9 +156,10 @@ def _read_text(path: Path, source: str, options: dict) -> dict:
     names = options.get("names")
     if isinstance(names, dict):
         raise InputError(
-            "--names VAR:... chooses an array of a .npz or .mat file; a text table has none",
+            "names as {array: [names]} chooses an array of a .npz or .mat file; a text table has "
+            "none",
             source=source,
-            fix="give the names alone: --names a,b,c",
+            fix='give the names alone: names=["a", "b", "c"]',
         )
     table, notes = read_text_arrow(path, source, options.get("skip_rows") or 0, names)
     if table.num_rows == 0:
@@ -204,7 +205,7 @@ def _read_arrays(path: Path, source: str, options: dict) -> dict:
         arrays = read_npz(path, source) if suffix == ".npz" else read_npy(path, source)
     if options.get("skip_rows"):
         raise InputError(
-            "--skip-rows applies to text tables; this file holds arrays",
+            "skip_rows= applies to text tables; this file holds arrays",
             source=source,
             fix="leave it out",
         )
@@ -256,17 +257,19 @@ def read_columns(
     if is_rosbag(path):
         if any(value for value in options.values()):
             raise InputError(
-                "--skip-rows, --names and --samples-axis/--channels-axis do not apply to a ROS bag",
+                "skip_rows=, names= and samples_axis=/channels_axis= do not apply to a ROS bag",
                 source=source,
                 fix="leave them out",
             )
         return read_rosbag(path, topic)
     if topic is not None:
         raise InputError(
-            f"--topic {topic}: only a ROS bag has topics", source=source, fix="leave --topic out"
+            f"topic={topic!r}: only a ROS bag has topics", source=source, fix="leave topic= out"
         )
+    if not path.exists():
+        raise MissingFileError("no such file", source=source)
     if not path.is_file():
-        raise InputError("no such file", source=source, fix="check the path")
+        raise InputError("is a folder, not a recording", source=source, fix="check the path")
     suffix = path.suffix.lower()
     if suffix not in TABLE_SUFFIXES:
         raise InputError(
@@ -277,7 +280,7 @@ def read_columns(
         )
     if suffix not in ARRAY_SUFFIXES and (samples_axis is not None or channels_axis is not None):
         raise InputError(
-            "--samples-axis and --channels-axis apply to arrays (.npz, .npy, .mat)",
+            "samples_axis= and channels_axis= apply to arrays (.npz, .npy, .mat)",
             source=source,
             fix="leave them out",
         )
@@ -287,7 +290,7 @@ def read_columns(
         elif suffix in (".parquet", ".pq"):
             if skip_rows or names:
                 raise InputError(
-                    "--skip-rows and --names apply to text tables and arrays, not Parquet",
+                    "skip_rows= and names= apply to text tables and arrays, not Parquet",
                     source=source,
                     fix="leave them out",
                 )

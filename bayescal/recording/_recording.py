@@ -132,7 +132,7 @@ class Recording:
             if role == "time column" and name in self.other_columns:
                 fix = (
                     "write it in seconds, or as ISO 8601 dates and times "
-                    "(2024-05-01T12:00:00.010), or pass --rate HZ"
+                    "(2024-05-01T12:00:00.010), or pass rate_hz=HZ"
                 )
             raise InputError(
                 f"{role} '{name}' {problem}",
@@ -174,20 +174,45 @@ class Recording:
         """
         return name in self.columns or name in self.unusable or name in self.other_columns
 
-    def channel(self, name: str, **options) -> "Channel":
+    def channel(
+        self,
+        name: str,
+        *,
+        unit: str | None = None,
+        scale: float | None = None,
+        rate_hz: float | None = None,
+        time_column: str | None = None,
+        time_unit: str | None = None,
+        start: float | None = None,
+        stop: float | None = None,
+        gaps: str = "error",
+        temperature: str | None = None,
+        at_rest: bool = True,
+    ) -> "Channel":
         """Column ``name`` checked and put on a regular sample grid.
 
         Parameters
         ----------
         name : str
             The column's name.
-        **options
-            Those of ``bayescal.recording.prepare_channel``: ``unit`` (the channel's unit;
-            else the header's, else read from the name), ``scale`` (a factor, or a sensor
-            card's name, for raw counts), ``rate`` (Hz: ignore the time stamps),
-            ``time_column``, ``time_unit``, ``start`` and ``stop`` (seconds from the first
-            sample of the file), ``gaps`` ("error" or "split") and ``temperature`` (a column
-            to put on the same grid).
+        unit : str, optional
+            The channel's unit (else the header's, else read from the name).
+        scale : float, optional
+            A factor the values are multiplied by (raw counts to ``unit``: 1/131 for a gyro
+            giving 131 LSB per deg/s).
+        rate_hz : float, optional
+            Sample rate, Hz: take the samples as evenly spaced, ignoring the time stamps.
+        time_column, time_unit : str, optional
+            The time column (default: ``time`` or ``t``) and its unit (s, ms, us, ns).
+        start, stop : float, optional
+            The window, seconds from the first sample of the file.
+        gaps : "error" or "split"
+            On a gap in the time stamps: refuse, or keep the segments with NaN between them.
+        temperature : str, optional
+            A temperature column to put on the same grid (:attr:`Channel.temperature`).
+        at_rest : bool
+            The sensor is still throughout; False (a calibration session, moved between
+            poses) leaves out the glitch check, which a fast turn of the hand would fail.
 
         Returns
         -------
@@ -205,7 +230,20 @@ class Recording:
         >>> import bayescal as bc
         >>> gyro = bc.load_recording("imu.csv").channel("gyro_x", unit="deg/s")  # doctest: +SKIP
         """
-        return prepare_channel(self, name, **options)
+        return prepare_channel(
+            self,
+            name,
+            unit=unit,
+            scale=scale,
+            rate_hz=rate_hz,
+            time_column=time_column,
+            time_unit=time_unit,
+            start=start,
+            stop=stop,
+            gaps=gaps,
+            temperature=temperature,
+            at_rest=at_rest,
+        )
 
 
 def load_recording(
@@ -468,7 +506,7 @@ def _time_in_seconds(
             f"'{unit_text}' is not a unit of time",
             source=table.source,
             column=name,
-            fix="pass --time-unit s, ms, us or ns",
+            fix='pass time_unit="s", "ms", "us" or "ns"',
         )
     return (raw if unit.to_si == 1 else raw * unit.to_si), note, declared
 
@@ -502,7 +540,7 @@ def _check_finite(values, place: _Place, offset, source, column) -> tuple[float,
         f"first at {place(offset + int(np.flatnonzero(bad)[0]))}",
         source=source,
         column=column,
-        fix="pick a window without them (--start/--stop) or repair the file",
+        fix="pick a window without them (start=/stop=) or repair the file",
     )
 
 
@@ -554,7 +592,7 @@ def _check_time_order(time, place: _Place, source, column) -> np.ndarray:
                 f"; {repeated} stamps repeat the one before: the clock is coarser than the "
                 f"sample period{_float32_note(time, resolution)}"
             )
-            fix = "pass --rate HZ to take the samples as evenly spaced, or store finer stamps"
+            fix = "pass rate_hz=HZ to take the samples as evenly spaced, or store finer stamps"
         raise InputError(
             f"{what} time stamp at {replace(place, relative_time=time - time[0])(index)}; "
             f"{not_increasing.size} interval(s) do not increase{coarse}",
@@ -601,8 +639,8 @@ def gap_error(step: float, periods: float, where: str, source, column) -> InputE
         f"gap of {step:.6g} s ({periods:.1f} sample periods) at {where}",
         source=source,
         column=column,
-        fix="pass --gaps split to analyse the segments without bridging the gaps, or pick a "
-        "window with --start/--stop",
+        fix='pass gaps="split" to analyse the segments without bridging the gaps, or pick a '
+        "window with start=/stop=",
     )
 
 
@@ -653,7 +691,7 @@ def _grid_positions(relative_time, window, place: _Place, source, column, gaps, 
             f"half a period off a {period:.6g} s grid, first at {place(first)}",
             source=source,
             column=column,
-            fix=f"pass --rate HZ to treat the samples as evenly spaced (their mean rate is "
+            fix=f"pass rate_hz=HZ to treat the samples as evenly spaced (their mean rate is "
             f"{(time.size - 1) / time[-1]:.6g} Hz), or resample upstream",
         )
     if off_grid.any():
@@ -693,12 +731,12 @@ def _check_rate(rate, declared: bool, source, column) -> list[str]:
             if not declared and rate < IMPLAUSIBLE_RATE_HZ
             else ""
         )
-        confirm = ", or --time-unit s if the stamps are seconds" if not declared else ""
+        confirm = ', or time_unit="s" if the stamps are seconds' if not declared else ""
         raise InputError(
             f"the time stamps give a sample rate of {rate:.6g} Hz{hint}, not an IMU's",
             source=source,
             column=column,
-            fix=f"pass --time-unit (s, ms, us, ns) or --rate HZ{confirm}",
+            fix=f"pass time_unit= (s, ms, us, ns) or rate_hz=HZ{confirm}",
         )
     if not declared and rate < UNUSUAL_RATE_HZ:
         return [
@@ -720,7 +758,7 @@ def _check_magnitude(values, extremes, place: _Place, offset, source, column, un
             f"{LARGEST_VALUE:.0e}: its square overflows float64",
             source=source,
             column=column,
-            fix="check the column; for raw numbers in another scale pass --scale FACTOR",
+            fix="check the column; for raw numbers in another scale pass scale=FACTOR",
         )
     if 0 < spread < SMALLEST_SPREAD:
         raise InputError(
@@ -728,7 +766,7 @@ def _check_magnitude(values, extremes, place: _Place, offset, source, column, un
             "their squares underflow float64",
             source=source,
             column=column,
-            fix="pass --scale FACTOR to express them in a larger unit",
+            fix="pass scale=FACTOR to express them in a larger unit",
         )
 
 
@@ -759,7 +797,7 @@ def _check_constant_and_rail(
                 f"{unit} from {place(first)}, far outside the rest of the record (saturation)",
                 source=source,
                 column=column,
-                fix="exclude the saturated part with --start/--stop",
+                fix="exclude the saturated part with start=/stop=",
             )
 
 
@@ -798,7 +836,7 @@ def _check_glitches(values, median: float, place: _Place, offset, source, column
         f"at {place(offset + first)}",
         source=source,
         column=column,
-        fix="repair or remove those rows, or pick a window without them (--start/--stop)",
+        fix="repair or remove those rows, or pick a window without them (start=/stop=)",
     )
 
 
@@ -811,10 +849,11 @@ def _static_plausibility(
     parsed = parse_unit(unit)
     if parsed.quantity == "angular_rate":
         reading, limit, label = abs(level) * parsed.to_si / DEG, STATIC_GYRO_LIMIT_DEG_S, "deg/s"
-        example = "--scale 1/131 for 131 LSB per deg/s"
+        factor, per = "1/131", "131 LSB per deg/s"
     elif parsed.quantity == "acceleration":
         reading = abs(level) * parsed.to_si / STANDARD_GRAVITY
-        limit, label, example = STATIC_ACCEL_LIMIT_G, "g", "--scale 1/16384 for 16384 LSB per g"
+        limit, label = STATIC_ACCEL_LIMIT_G, "g"
+        factor, per = "1/16384", "16384 LSB per g"
     else:
         return []
     if reading <= limit:
@@ -828,15 +867,15 @@ def _static_plausibility(
             f"{problem} (the unit {unit} was assumed)",
             source=source,
             column=column,
-            fix=f"pass --scale FACTOR and --unit (e.g. {example}, or --scale SENSOR for a "
-            "sensor card's resolution), or --unit LSB to analyse the counts as they are",
+            fix=f"pass scale=FACTOR and unit= (e.g. scale={factor} for {per}), or "
+            'unit="LSB" to analyse the counts as they are',
         )
     if scaled:
         return [
             f"'{column}' {problem[: -len(' raw counts?')]} after --scale: counts with an offset "
             "(unsigned, centred on mid-scale)? The noise figures do not depend on it; the bias does"
         ]
-    return [f"'{column}' {problem} If so, pass --scale FACTOR (e.g. {example})"]
+    return [f"'{column}' {problem} If so, pass --scale FACTOR (e.g. --scale {factor} for {per})"]
 
 
 def _clipping_notes(values, unit) -> list[str]:
@@ -869,7 +908,7 @@ def _time_base(
     if rate is not None:
         if not (MIN_RATE_HZ <= rate <= MAX_RATE_HZ):
             raise InputError(
-                f"--rate {rate:g} must be a sample rate from {MIN_RATE_HZ:g} to {MAX_RATE_HZ:g} Hz"
+                f"rate_hz={rate:g} must be a sample rate from {MIN_RATE_HZ:g} to {MAX_RATE_HZ:g} Hz"
             )
         notes = (
             [
@@ -882,13 +921,13 @@ def _time_base(
         return np.arange(n_rows) / rate, None, notes, True, None
     if time_name is None:
         raise InputError(
-            "no time column ('time' or 't') and no --rate",
+            "no time column ('time' or 't') and no rate_hz=",
             source=table.source,
-            fix=f"pass --rate HZ or --time-column NAME (columns: {', '.join(table.columns)})",
+            fix=f"pass rate_hz=HZ or time_column=NAME (columns: {', '.join(table.columns)})",
         )
     if time_unit is not None and parse_unit(time_unit).quantity != "time":
         raise InputError(
-            f"--time-unit {time_unit!r} is not a unit of time", fix="give s, ms, us or ns"
+            f"time_unit={time_unit!r} is not a unit of time", fix="give s, ms, us or ns"
         )
     time, time_note, declared = _time_in_seconds(table, time_name, time_unit)
     steps = _check_time_order(time, _Place(row_offset=table.row_offset), table.source, time_name)
@@ -923,11 +962,11 @@ def _on_grid(values: np.ndarray, positions: np.ndarray | None) -> np.ndarray:
 
 
 def _check_window(start, stop) -> None:
-    for argument, value in (("--start", start), ("--stop", stop)):
+    for argument, value in (("start", start), ("stop", stop)):
         if value is not None and not math.isfinite(value):
-            raise InputError(f"{argument} {value} must be a finite number of seconds")
+            raise InputError(f"{argument}={value} must be a finite number of seconds")
     if start is not None and stop is not None and stop <= start:
-        raise InputError(f"--stop {stop:g} s must come after --start {start:g} s")
+        raise InputError(f"stop={stop:g} s must come after start={start:g} s")
 
 
 def prepare_channel(
@@ -936,7 +975,7 @@ def prepare_channel(
     *,
     unit: str | None = None,
     scale: float | None = None,
-    rate: float | None = None,
+    rate_hz: float | None = None,
     time_column: str | None = None,
     time_unit: str | None = None,
     start: float | None = None,
@@ -953,16 +992,20 @@ def prepare_channel(
     grid. The checks and notes are those of this module's docstring; ``at_rest=False`` (a
     calibration session, moved between poses) leaves out the glitch check, which a fast
     turn of the hand would fail: the still sections a calibration uses leave glitches out.
+
+    One function (over 80 lines) on purpose: the checks run in the order of this module's
+    docstring, each on what the previous one left, and each names the row and time of what it
+    refuses.
     """
     if gaps not in ("error", "split"):
-        raise InputError(f"--gaps {gaps!r} must be 'error' or 'split'")
+        raise InputError(f"gaps={gaps!r} must be 'error' or 'split'")
     _check_window(start, stop)
     if scale is not None and not (math.isfinite(scale) and scale != 0):
-        raise InputError(f"--scale {scale!r} must be a finite number other than 0")
+        raise InputError(f"scale={scale!r} must be a finite number other than 0")
     values = table.require(channel, "channel")
     if temperature is not None and temperature == channel:
         raise InputError(
-            f"--temperature {temperature} names the analysed channel",
+            f"temperature={temperature!r} names the analysed channel",
             source=table.source,
             fix="name the temperature column",
         )
@@ -973,7 +1016,7 @@ def prepare_channel(
         values = values * scale
         notes.append(f"'{channel}' multiplied by {scale:.6g} (--scale): values in {resolved_unit}")
     temperature_values = table.require(temperature, "temperature column") if temperature else None
-    given_rate = rate
+    rate = rate_hz
 
     relative, time_name, time_notes, declared, raw_time = _time_base(
         table, time_column, time_unit, rate, values.size
@@ -983,7 +1026,7 @@ def prepare_channel(
             f"'{channel}' is the time column, not a channel to analyse",
             source=table.source,
             column=channel,
-            fix="name a sensor's column with --channel",
+            fix="name a sensor's column as the channel",
         )
     notes.extend(time_notes)
     place = _Place(relative, table.row_offset)
@@ -996,7 +1039,7 @@ def prepare_channel(
             f"(the record lasts {relative[-1]:.6g} s)",
             source=table.source,
             column=channel,
-            fix="widen the window (--start/--stop) or record longer",
+            fix="widen the window (start=/stop=) or record longer",
         )
     window = slice(first, last)
     extremes = _check_finite(values[window], place, first, table.source, channel)
@@ -1036,7 +1079,7 @@ def prepare_channel(
         notes=tuple(dict.fromkeys(notes)),
         scale=scale,
         grid={
-            "rate": given_rate,
+            "rate_hz": rate_hz,
             "time_column": time_column,
             "time_unit": time_unit,
             "start": start,

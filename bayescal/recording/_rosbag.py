@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._errors import InputError
+from .._errors import InputError, MissingFileError
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
 SUFFIXES = (".bag", ".db3", ".mcap")
@@ -92,7 +92,7 @@ def _choose_topic(reader, topic: str | None, source: str) -> str:
             raise InputError(
                 f"the bag has {len(imu)} sensor_msgs/Imu topics: {', '.join(imu)}",
                 source=source,
-                fix="choose one with --topic",
+                fix="choose one with topic=",
             )
         return imu[0]
     if topic not in imu:
@@ -218,7 +218,7 @@ def read_rosbag(path: str | Path, topic: str | None = None) -> dict:
     path = Path(path)
     source = str(path)
     if not path.exists():
-        raise InputError("no such file", source=source, fix="check the path")
+        raise MissingFileError("no such file", source=source)
     reader = _open(path, source)
     try:
         chosen = _choose_topic(reader, topic, source)

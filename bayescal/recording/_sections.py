@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._inputs import samples_and_rate
+
 WINDOW_S = 0.25
 SCATTER_FACTOR = 3.0
 MIN_DURATION_S = 2.0
@@ -42,7 +44,7 @@ def _running(values: np.ndarray, width: int):
 
 
 def find_static_sections(
-    values: np.ndarray, rate_hz: float, *, min_duration_s: float = MIN_DURATION_S
+    values, rate_hz: float | None = None, *, min_duration_s: float = MIN_DURATION_S
 ) -> list[StaticSection]:
     """Still stretches of a (samples, channels) array, in time order.
 
@@ -53,10 +55,10 @@ def find_static_sections(
 
     Parameters
     ----------
-    values : array_like
+    values : array_like or Channel
         The samples, (samples,) or (samples, channels), any unit (counts welcome).
     rate_hz : float
-        Sample rate, Hz.
+        Sample rate, Hz (from the channel when ``values`` is a :class:`~bayescal.Channel`).
     min_duration_s : float
         The shortest still stretch kept, s.
 
@@ -76,6 +78,7 @@ def find_static_sections(
     >>> [(s.start, s.stop) for s in bc.find_static_sections(session, 100.0)]
     [(25, 451), (725, 1176)]
     """
+    values, rate_hz = samples_and_rate(values, rate_hz, argument="values")
     values = np.asarray(values, dtype=float)
     if values.ndim == 1:
         values = values[:, None]

@@ -73,13 +73,13 @@ class SensorCard:
         section = _SECTION_OF_QUANTITY.get(quantity)
         if section is None:
             raise InputError(
-                f"--sensor {self.name}: the channel's unit '{unit}' is neither an "
+                f"sensor={self.name!r}: the channel's unit '{unit}' is neither an "
                 "angular rate nor an acceleration",
-                fix="pass --unit",
+                fix="pass unit=",
             )
         if section not in self.content:
             raise InputError(
-                f"--sensor {self.name}: the card has no [{section}] section",
+                f"sensor={self.name!r}: the card has no [{section}] section",
                 fix="choose a card for this kind of sensor (bayescal sensors)",
             )
         return self.content[section]
@@ -157,6 +157,6 @@ def find_card(name: str) -> SensorCard:
         if wanted in (card.name.lower().replace("_", "-"), card.path.stem.lower()):
             return card
     raise InputError(
-        f"--sensor {name}: no such sensor card",
+        f"sensor={name!r}: no such sensor card",
         fix=f"choose one of {', '.join(card.name for card in cards) or '(none)'}",
     )

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._errors import InputError
+from .._errors import InputError, MissingFileError
 from ._recording import (
     _GAP_PERIODS,
     Channel,
@@ -115,7 +115,7 @@ def _batches(path: Path, source: str, columns, skip_rows: int) -> Iterator:
     if path.suffix.lower() in (".parquet", ".pq"):
         if skip_rows:
             raise InputError(
-                "--skip-rows applies to text tables, not Parquet",
+                "skip_rows= applies to text tables, not Parquet",
                 source=source,
                 fix="leave it out",
             )
@@ -215,7 +215,7 @@ def stream_channel(
     *,
     unit: str | None = None,
     scale: float | None = None,
-    rate: float | None = None,
+    rate_hz: float | None = None,
     time_column: str | None = None,
     time_unit: str | None = None,
     start: float | None = None,
@@ -235,7 +235,7 @@ def stream_channel(
         A Parquet file or a text table (CSV, semicolon, tab or space separated).
     channel : str
         The column to analyse.
-    unit, scale, rate, time_column, time_unit, start, stop, gaps, at_rest
+    unit, scale, rate_hz, time_column, time_unit, start, stop, gaps, at_rest
         As :meth:`Recording.channel <bayescal.Recording.channel>`.
     skip_rows : int
         Lines of a text table to skip before its header.
@@ -254,11 +254,19 @@ def stream_channel(
     ------
     InputError
         As :meth:`Recording.channel`, naming the file, column and data row.
+
+    Notes
+    -----
+    One function (over 80 lines) on purpose: one pass over the file's blocks, whose loop holds
+    the state the grid is joined with; split, that state would travel between functions.
     """
+    rate = rate_hz
     path = Path(path)
     source = str(path)
+    if not path.exists():
+        raise MissingFileError("no such file", source=source)
     if not path.is_file():
-        raise InputError("no such file", source=source, fix="check the path")
+        raise InputError("is a folder, not a recording", source=source, fix="check the path")
     if path.suffix.lower() not in STREAMED_SUFFIXES:
         raise InputError(
             f"a {path.suffix} file is read in memory, not streamed",
@@ -298,7 +306,7 @@ def stream_channel(
                 continue
             part = _rows(block, first, last, row + first)
             prepared = prepare_channel(
-                part, channel, rate=rate, gaps=gaps, at_rest=at_rest, **options
+                part, channel, rate_hz=rate, gaps=gaps, at_rest=at_rest, **options
             )
             joiner.add(prepared, float(seconds[first]), float(seconds[last - 1]), row + first + 1)
         if joiner.rate is None:
@@ -306,7 +314,7 @@ def stream_channel(
                 f"no samples in the window [{start or 0:g}, {'end' if stop is None else stop}) s",
                 source=source,
                 column=channel,
-                fix="widen the window (--start/--stop)",
+                fix="widen the window (start=/stop=)",
             )
         spooled = writer.finish()
     except BaseException:
@@ -330,7 +338,7 @@ def stream_channel(
         notes=tuple(dict.fromkeys(notes)),
         scale=scale,
         grid={
-            "rate": rate,
+            "rate_hz": rate,
             "time_column": time_column,
             "time_unit": time_unit,
             "start": start,

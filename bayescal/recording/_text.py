@@ -120,7 +120,7 @@ def sniff_table(path: Path, source: str, skip_rows: int) -> dict:
         skip_rows = max(skip_rows, 1)
     if skip_rows > len(lines):
         raise InputError(
-            f"--skip-rows {skip_rows}: the file has only {len(lines)} line(s)",
+            f"skip_rows={skip_rows}: the file has only {len(lines)} line(s)",
             source=source,
             fix="give the number of lines before the header",
         )
@@ -153,7 +153,7 @@ def sniff_table(path: Path, source: str, skip_rows: int) -> dict:
             f"the first {preamble} line(s) of the table do not split into its {width} "
             f"columns (line {skipped + 1}: '{shown}'): logger metadata before the header?",
             source=source,
-            fix=f"pass --skip-rows {skipped + preamble} (or start those lines with '#')",
+            fix=f"pass skip_rows={skipped + preamble} (or start those lines with '#')",
         )
     data_cells = [cell for line in sample[1:] for cell in _fields(line, delimiter)]
     decimal_comma = delimiter != "," and any(_COMMA_NUMBER.match(c) for c in data_cells)
@@ -193,7 +193,7 @@ def text_arrow_options(path: Path, source: str, skip_rows: int, names: list[str]
     width = layout["width"]
     if names is not None and len(names) != width:
         raise InputError(
-            f"--names gives {len(names)} name(s) for a table of {width} columns",
+            f"names= gives {len(names)} name(s) for a table of {width} columns",
             source=source,
             fix="name every column, in order",
         )

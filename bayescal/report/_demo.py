@@ -7,6 +7,7 @@ from pathlib import Path
 
 from .._output import staged, write_csv, write_json
 from ..capabilities._demo import DEMO_CHANNELS, DEMO_SENSOR, DISCOVERY_BASELINE, demo_recording
+from ..inference._sampler import Sampler
 from ..recording._recording import load_recording
 from ._discovery import discovery_findings
 from ._report import ReportOutcome, report_recording
@@ -42,6 +43,6 @@ def write_demo(
         sensor=DEMO_SENSOR,
         seed=seed,
         discoveries=discoveries,
-        progress=progress,
+        sampler=Sampler(progress=progress),
     )
     return csv_path, outcome

@@ -9,7 +9,8 @@ import numpy as np
 from scipy import stats
 
 from .._output import atomic_path, file_stem, to_jsonable, write_json, write_netcdf
-from ..capabilities._discovery import CheckResult, Discovery, SearchResult, discover
+from ..capabilities._discovery import CheckResult, Discovery, discover
+from ..inference._discovery_search import SearchResult
 from ..inference._mcmc import summarize
 from ..models._composite import bin_ratios
 from ..recording._recording import Channel, Recording, companions

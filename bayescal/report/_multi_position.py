@@ -5,7 +5,7 @@ from importlib.metadata import version
 
 from scipy import stats
 
-from ..capabilities._multi_position import MultiPositionCalibration
+from ..capabilities._multi_position import MultiPositionCalibration, scale_unit
 from ..classical._multi_position import ClassicalCalibration, calibration_matrices
 from ..inference._mcmc import summarize
 from ..recording._units import parse_unit
@@ -20,32 +20,17 @@ MODEL = {
 }
 
 
-def _scale_unit(unit: str) -> str:
-    if parse_unit(unit).name == "m/s^2":
-        return "1"
-    return f"m/s^2/({unit})" if "/" in unit else f"m/s^2/{unit}"
-
-
-def parameter_units(names, unit: str) -> dict:
-    units = {"pose_scatter": "m/s^2", "g_local": "m/s^2"}
-    for name in names:
-        if name.startswith("scale_"):
-            units[name] = _scale_unit(unit)
-        elif name.startswith("offset_"):
-            units[name] = unit
-        else:
-            units[name] = "rad"
-    return units
-
-
 def multi_position_result(
     calibration: MultiPositionCalibration, *, source: str, channels, notes: list[str]
 ) -> dict:
-    """The JSON document of ``bayescal multi-position``."""
+    """The JSON document of ``bayescal multi-position``.
+
+    Over 80 lines: the document's layout, block after block, as the JSON holds it.
+    """
     unit, rate_hz, poses = calibration.unit, calibration.rate_hz, calibration.poses
     classical, bayesian = calibration.classical, calibration.bayesian
     gravity, found_by = classical.gravity, calibration.found_by
-    units = parameter_units(classical.names, unit)
+    units = calibration.units
     pose_list = []
     for i in range(poses.n):
         entry = {
@@ -78,8 +63,8 @@ def multi_position_result(
             **matrices,
             "units": {
                 "misalignment_T": "1",
-                "scale_K": _scale_unit(unit),
-                "calibration_TK": _scale_unit(unit),
+                "scale_K": scale_unit(unit),
+                "calibration_TK": scale_unit(unit),
                 "sensitivity": f"{unit} per m/s^2 (rows: sensing axes in the body frame)",
                 "offset_b": unit,
                 **(

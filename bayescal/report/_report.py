@@ -16,6 +16,7 @@ from .._errors import InputError
 from .._output import file_stem, write_atomic, write_json, write_netcdf
 from ..capabilities._noise import fit_noise
 from ..inference._datatree import noise_datatree
+from ..inference._sampler import Sampler
 from ..models._terms import parse_terms
 from ..recording._recording import Channel, prepare_channel
 from ..recording._sensor_cards import find_card
@@ -52,9 +53,7 @@ def analyse_channel(
     taus="octave",
     card=None,
     seed: int = 0,
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
-    progress: bool = False,
+    sampler: Sampler = Sampler(),
     window: dict | None = None,
 ) -> ChannelAnalysis:
     """Classical and Bayesian noise of one prepared channel, with the posterior bands of the
@@ -67,9 +66,7 @@ def analyse_channel(
         seed=seed,
         confidence=confidence,
         taus=taus,
-        n_walkers=n_walkers,
-        max_steps=max_steps,
-        progress=progress,
+        sampler=sampler,
     )
     window = {"start_s": data.start_s, "stop_s": data.stop_s, **(window or {})}
     window_notes = window.pop("notes", [])
@@ -94,8 +91,7 @@ def report_recording(
     confidence: float = 0.95,
     taus="octave",
     seed: int = 0,
-    n_walkers: int = 32,
-    max_steps: int = 40_000,
+    sampler: Sampler = Sampler(),
     rate: float | None = None,
     time_column: str | None = None,
     time_unit: str | None = None,
@@ -105,7 +101,6 @@ def report_recording(
     options: dict | None = None,
     window: dict | None = None,
     discoveries=None,
-    progress: bool = False,
 ) -> ReportOutcome:
     """Analyse ``channels`` of ``table`` and write the page, its JSON and the posteriors into
     ``folder``.
@@ -117,6 +112,12 @@ def report_recording(
     dict channel -> findings, or a function ``(table, data) -> findings or None`` called for
     each channel with the recording and the channel's prepared data
     (:class:`~bayescal.Channel`), after its noise analysis.
+
+    ``sampler``: how every posterior is sampled; its ``progress`` also shows the report's own
+    bar over the channels.
+
+    Over 80 lines: one pass over the channels with the progress bar and the discoveries it
+    interleaves, then the files.
     """
     parsed_terms = parse_terms(terms)
     card = find_card(sensor) if sensor else None
@@ -132,7 +133,7 @@ def report_recording(
         prepare_channel(
             table,
             channel,
-            rate=rate,
+            rate_hz=rate,
             time_column=time_column,
             time_unit=time_unit,
             start=start,
@@ -145,7 +146,7 @@ def report_recording(
     folder = Path(folder)
     folder.mkdir(exist_ok=True)
     bar = None
-    if progress:
+    if sampler.progress:
         from tqdm import tqdm
 
         bar = tqdm(total=len(prepared) + 1, desc="report", unit="step", file=sys.stderr)
@@ -170,9 +171,7 @@ def report_recording(
                     taus=taus,
                     card=card,
                     seed=seed,
-                    n_walkers=n_walkers,
-                    max_steps=max_steps,
-                    progress=progress,
+                    sampler=sampler,
                     window=dict(window or {"selected_by": "whole record"}),
                 )
             )

@@ -17,13 +17,16 @@ def _entry(value, uncertainty, unit):
 
 def two_position_result(calibration: TwoPositionCalibration, found_by: str) -> dict:
     """The JSON document of ``bayescal two-position``; ``found_by`` says where the sections
-    came from."""
+    came from.
+
+    Over 80 lines: the document's layout, block after block, as the JSON holds it.
+    """
     channel, unit, rate_hz = calibration.channel, calibration.unit, calibration.rate_hz
     up, down, gravity = calibration.up, calibration.down, calibration.gravity
     confidence, classical = calibration.confidence, calibration.classical
     bayesian = calibration.bayesian
     parsed = parse_unit(unit)
-    scale_unit = f"m/s^2/({unit})" if "/" in unit else f"m/s^2/{unit}"
+    scale_unit = calibration.scale_unit
 
     def section(s: Section):
         n = int(np.count_nonzero(~np.isnan(s.values)))

@@ -1,0 +1,332 @@
+"""Discovery: find the physics a model of a static channel left out, add it, show the fit
+improve.
+
+First, two effects of single samples are scanned for on the samples' distribution, each
+accepted on a decisive Bayes factor: clipping at a rail (``saturation``,
+:mod:`bayescal._saturation`; the clipped samples are imputed for what follows) and isolated
+glitches (``outliers``, replaced by their neighbours' mean). Then the loop (documented for
+users in docs/guide/discovery.md):
+
+1. fit the current model — bias, noise terms and deterministic terms — by its Whittle
+   likelihood (:mod:`bayescal._whittle`): the periodogram of the increments of the data minus
+   the deterministic terms, with the noise terms' exact expected periodogram. Deterministic
+   coefficients are profiled out exactly (the likelihood is quadratic in them); the slow ones
+   are then taken from the block means (:func:`level_coefficients`). The model's score counts
+   each frequency once: the exact Gaussian likelihood of 128 block means up to their Nyquist
+   frequency, the Whittle bins above it;
+2. run the checks (:func:`run_checks`): Allan deviation against the model, the spectrum in
+   octave bands and its largest line, residual block means over time, against the temperature
+   and against the accelerometers, tails, a rail, discrete levels, time stamps. Each gives a
+   statistic, a p-value (Bonferroni-corrected over the places it looked) and where it looked;
+3. fit every catalogue term not yet in the model (../shared/DESIGN.md names), and compare each
+   with the current model by the Schwarz (BIC) approximation of the log Bayes factor. A
+   nonlinear parameter found by search (a sinusoid's frequency among the Fourier
+   frequencies, a transient's or a Gauss-Markov time constant on a log grid) has a uniform
+   prior over the values searched: it pays the log of their number, a lower bound of the
+   Bayes factor's cost. The term with the largest log Bayes factor is accepted when that exceeds
+   log(100) — "decisive" on Jeffreys' scale; its expected log predictive density gain
+   (pointwise over independent frequency bins and one-block-ahead predictions of the block
+   means, AIC-penalised) and the standard error of that gain are reported beside it;
+4. repeat until every check passes (nothing is left to explain) or no term is decisive, and
+   report which located mismatches are gone.
+
+Because the candidates compete on the same data, the signatures decide between effects that
+raise the same statistic: a thermal polynomial only explains what follows the temperature, a
+warm-up only what decays from power-on, a random walk what is spread over the spectrum as
+1/f^2, a Gauss-Markov term what flattens below its corner frequency.
+"""
+
+import math
+from collections.abc import Callable
+from functools import partial
+
+import equinox as eqx
+import numpy as np
+
+from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from .._errors import InputError
+from ..classical._allan import allan_deviation
+from ..models._composite import BASELINE_TERMS, ModelFit, ModelSpec
+from ..models._noise_problem import noise_summaries
+from ..models._terms import (
+    CANDIDATE_TERMS,
+    FILTER_SHAPE_OF_TERM,
+    PARAMETERS_OF_TERM,
+    parameter_unit,
+)
+from ..models.effects._base import Effect
+from ..models.effects._catalogue import SEARCHED
+from ..models.effects.outliers import Outliers, outlier_scan, without_outliers
+from ..models.effects.output_filter import OutputFilter
+from ..models.effects.quantization import Quantization
+from ..models.effects.saturation import Saturation, impute_clipped, saturation_scan
+from ._checks import CHECK_LEVEL, run_checks
+from ._discovery_fit import Context, DiscoveryData, fit_model
+from ._priors import default_prior
+from ._selection import select_noise_terms
+
+DECISIVE_LOG_BAYES_FACTOR = math.log(100.0)
+"""Jeffreys' "decisive": odds of 100 to 1."""
+
+
+UNMODELLED_CHECKS = ("timestamps", "rail")
+"""Checks no term of the search answers — the time stamps, and a rail, which the saturation
+scan decides before the search: they are reported, but do not start a search."""
+
+
+HIGH_FREQUENCY_FRACTION = 0.125
+"""A mismatch above this fraction of the sample rate (or at averaging times below its
+inverse) lies where the sensor's output filter and rounding act."""
+
+
+def candidate_fits(context: Context, current: ModelFit) -> dict[str, tuple[ModelFit, dict]]:
+    """Each catalogue effect not yet in the model (:data:`SEARCHED`, in order), added and
+    fitted: name -> (fit, search record)."""
+    candidates = {}
+    for effect in SEARCHED:
+        proposal = effect.propose(context, current)
+        if proposal is not None:
+            candidates[effect.name] = proposal
+    return candidates
+
+
+def _elpd_difference(new: ModelFit, old: ModelFit) -> tuple[float, float]:
+    """AIC-penalised ELPD gain and its standard error, pointwise over frequency bins and
+    block predictions."""
+    difference = new.pointwise - old.pointwise
+    gain = float(difference.sum()) - (new.n_parameters - old.n_parameters)
+    return gain, float(math.sqrt(difference.size) * np.std(difference))
+
+
+class Finding(eqx.Module):
+    """One accepted effect: the effect, the fit with it, and the evidence."""
+
+    effect: Effect
+    fit: ModelFit
+    log_bayes_factor: float
+    delta_elpd: float
+    delta_elpd_se: float
+    runner_up: tuple
+    search: dict
+
+    @property
+    def name(self) -> str:
+        return self.effect.name
+
+
+class SearchResult(eqx.Module):
+    """What the search found (:func:`search_effects`): the fits, the findings, the checks."""
+
+    context: Context
+    """The search's shared state (summaries, priors): what the findings are described with."""
+
+    data: DiscoveryData
+    baseline: ModelFit
+    final: ModelFit
+    findings: tuple
+    baseline_checks: list
+    final_checks: list
+    outliers: dict | None
+    undecided: tuple = ()
+    """(name, log Bayes factor) of the best candidate when the search stopped with a check
+    still failing because no term was decisive; empty otherwise."""
+    saturation: dict | None = None
+
+
+def search_effects(
+    data: DiscoveryData,
+    *,
+    baseline: tuple[str, ...] = ("white",),
+    max_effects: int = 4,
+    progress: Callable[[str], None] | None = None,
+    seed: int = 0,
+) -> SearchResult:
+    """Find, name and model what the ``baseline`` noise terms leave out of ``data``.
+
+    Two sample-level effects are scanned for first, on the samples' distribution: clipped
+    samples (``saturation``, imputed with ``seed`` for the fits that follow) and isolated
+    glitches (``outliers``, replaced by their neighbours' mean)."""
+    report = progress or (lambda message: None)
+    unknown = [term for term in baseline if term not in BASELINE_TERMS]
+    if unknown:
+        raise InputError(
+            f"baseline={baseline!r}: unknown term(s) {', '.join(unknown)}",
+            fix=f"use terms among {', '.join(sorted(BASELINE_TERMS))}",
+        )
+    if "white" not in baseline:
+        baseline = ("white", *baseline)
+    saturation, unclipped, outliers, clean = _sample_effects(data.values, seed)
+    context = Context.of(data, unclipped, clean)
+    report("fitting the baseline")
+    baseline_fit = fit_model(context, ModelSpec.from_names(baseline))
+    baseline_checks = run_checks(baseline_fit, data)
+    context, current, findings = _decided_before_search(
+        context, baseline_fit, baseline, baseline_checks, saturation, outliers
+    )
+    checks = baseline_checks if not findings else run_checks(current, data)
+    current, checks, searched, undecided = _search(context, current, checks, max_effects, report)
+    report("checking the final model")
+    return SearchResult(
+        context=context,
+        data=data,
+        baseline=baseline_fit,
+        final=current,
+        findings=(*findings, *searched),
+        baseline_checks=baseline_checks,
+        final_checks=checks,
+        outliers=outliers,
+        undecided=undecided,
+        saturation=saturation,
+    )
+
+
+def _decisive(scan: dict | None) -> dict | None:
+    """A sample-level scan when its log Bayes factor is decisive, else None."""
+    return scan if scan and scan["log_bayes_factor"] > DECISIVE_LOG_BAYES_FACTOR else None
+
+
+def _sample_effects(values: np.ndarray, seed: int):
+    """The sample-level scans: (saturation, the samples with the clipped ones imputed,
+    outliers, those with the outliers replaced); a scan is None where it is not decisive."""
+    saturation = _decisive(saturation_scan(values))
+    unclipped = (
+        impute_clipped(values, saturation, np.random.default_rng(seed)) if saturation else values
+    )
+    outliers = _decisive(outlier_scan(unclipped))
+    clean = without_outliers(unclipped, outliers["flagged"]) if outliers else unclipped
+    return saturation, unclipped, outliers, clean
+
+
+def _decided_before_search(
+    context: Context, current: ModelFit, baseline, baseline_checks, saturation, outliers
+) -> tuple[Context, ModelFit, list]:
+    """The effects named before the search: clipping and glitches (from their scans), the
+    grid the samples sit on, and the output filter when the baseline misses power near
+    Nyquist. Returns the context (with the filter, if one was decided), the model with them
+    and their findings."""
+    findings = []
+    for effect, scan in ((Saturation(), saturation), (Outliers(), outliers)):
+        if scan:
+            current = fit_model(context, current.spec.with_effect(effect))
+            findings.append(
+                Finding(
+                    effect,
+                    current,
+                    scan["log_bayes_factor"],
+                    scan["delta_elpd"],
+                    scan["delta_elpd_se"],
+                    (),
+                    {},
+                )
+            )
+    if context.lsb > 0:
+        findings.append(_grid_finding(context, current))
+    rate_hz = context.data.rate_hz
+    if _high_band_deficit(baseline_checks, rate_hz) and not current.spec.has("output_filter"):
+        decided = decide_output_filter(context, baseline)
+        if decided is not None:
+            effect, log_bayes_factor, record = decided
+            context = context.with_lowpass(effect)  # every model from here on sees the filter
+            fit = fit_model(context, current.spec)
+            gain, gain_se = _elpd_difference(fit, current)
+            findings.append(Finding(effect, fit, log_bayes_factor, gain, gain_se, (), record))
+            current = fit
+    return context, current, findings
+
+
+def _search(context: Context, current: ModelFit, checks, max_effects: int, report):
+    """Steps 2-4 of the loop (module docstring): while a located check fails, the decisive
+    best candidate is added. Returns the final model, its checks, the findings added and
+    ``undecided`` (the best candidate's name and log Bayes factor where none was decisive)."""
+    findings, undecided = [], ()
+    for _ in range(max_effects):
+        if not any(
+            not check["passed"] for check in checks if check["name"] not in UNMODELLED_CHECKS
+        ):
+            break  # nothing located: nothing left to explain
+        report(f"trying terms beyond {', '.join(current.spec.terms())}")
+        candidates = candidate_fits(context, current)
+        if not candidates:
+            break
+        ranked = sorted(candidates.items(), key=lambda item: item[1][0].schwarz, reverse=True)
+        name, (fit, search) = ranked[0]
+        log_bayes_factor = fit.schwarz - current.schwarz
+        if not log_bayes_factor > DECISIVE_LOG_BAYES_FACTOR:
+            undecided = (name, float(log_bayes_factor))
+            break
+        gain, gain_se = _elpd_difference(fit, current)
+        runner_up = (
+            (ranked[1][0], float(ranked[1][1][0].schwarz - current.schwarz))
+            if len(ranked) > 1
+            else ()
+        )
+        findings.append(
+            Finding(fit.spec.effects[-1], fit, log_bayes_factor, gain, gain_se, runner_up, search)
+        )
+        current = fit
+        checks = run_checks(current, context.data)
+    return current, checks, findings, undecided
+
+
+def _grid_finding(context: Context, current: ModelFit) -> Finding:
+    """``quantization`` named from the samples: they all sit on a grid of levels, which no
+    continuous noise does (the evidence is the samples themselves: no Bayes factor to
+    compute). Its rounding is a known white floor in every model of the search."""
+    levels = np.unique(context.clean[np.isfinite(context.clean)]).size
+    record = {"lsb": context.lsb, "levels": int(levels)}
+    return Finding(Quantization(lsb=context.lsb), current, math.inf, 0.0, 0.0, (), record)
+
+
+def _high_band_deficit(checks: list[dict], rate_hz: float) -> bool:
+    """Whether the spectrum check failed with less power than the model near Nyquist: the
+    signature of an output filter (a low-pass takes power away, only at high frequency)."""
+    (spectrum,) = [check for check in checks if check["name"] == "spectrum_bands"]
+    bands = spectrum["bands"]
+    return not spectrum["passed"] and any(
+        band["frequency_hz"][0] >= HIGH_FREQUENCY_FRACTION * rate_hz
+        and band["power_over_model"] < 1
+        and band["p_value"] * len(bands) < CHECK_LEVEL
+        for band in bands
+    )
+
+
+def decide_output_filter(context: Context, baseline: tuple[str, ...]):
+    """The sensor's output filter, when the baseline's spectrum misfits: the shape (one-tap,
+    decimation, Butterworth, biquad) the record holds decisive evidence for, chosen by Laplace
+    evidence among every stationary term (:func:`select_noise_terms`), with its MAP
+    parameters and their Laplace 90 % intervals; None when no shape is decisive. Its
+    shape is then fixed for the search (its uncertainty is second order for the effects that
+    follow)."""
+    data = context.data
+    values = context.clean
+    allan = allan_deviation(values, data.rate_hz, "octave")
+    selection = select_noise_terms(
+        *noise_summaries(values, data.rate_hz, ("white", *CANDIDATE_TERMS)),
+        partial(default_prior, allan=allan),
+        lsb=context.lsb,
+        # Every stationary term competes: power a low-pass seems to take away near Nyquist
+        # is often power a slow term added at low frequency, pulling the white level up.
+        candidates=CANDIDATE_TERMS,
+        base=tuple(term for term in baseline if term in PARAMETERS_OF_TERM),
+    )
+    chosen = [term for term in selection.terms if term in FILTER_SHAPE_OF_TERM]
+    if not chosen:
+        return None
+    shape = FILTER_SHAPE_OF_TERM[chosen[0]]
+    estimates = selection.estimates
+    names = PARAMETERS_OF_TERM[chosen[0]]
+    effect = OutputFilter.from_values(shape, {name: estimates[name][0] for name in names})
+    parameters = {"shape": {"value": shape}}
+    for name in names:
+        value, sd = estimates[name]
+        low, high = selection.interval(name)
+        parameters[name] = {
+            "mean": value,
+            "sd": sd,
+            "q05": low,
+            "q95": high,
+            "unit": parameter_unit(name, data.unit),
+        }
+    trial = next(trial for trial in selection.trials if trial.term == chosen[0])
+    record = {"parameters": parameters, "shapes": selection.table}
+    return effect, trial.log_bayes_factor, record

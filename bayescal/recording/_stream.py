@@ -357,9 +357,15 @@ def _progress_bar(path: Path, shown: bool):
 
 
 def _raw_names(headers, names: set[str]) -> list[str]:
-    """The file's own header names (units and all) of the columns ``names``."""
+    """The file's own header names (units and all) of the columns ``names``: a Parquet
+    column of lists ``vec`` holds the columns ``vec_0``, ``vec_1``, ..."""
     from ._readers import split_header
+
+    def holds(name: str) -> bool:
+        return name in names or any(
+            wanted.startswith(f"{name}_") and wanted[len(name) + 1 :].isdigit() for wanted in names
+        )
 
     headers = [str(name) for name in headers]
     split, _ = split_header(headers)
-    return [header for header, name in zip(headers, split, strict=True) if name in names]
+    return [header for header, name in zip(headers, split, strict=True) if holds(name)]

@@ -147,3 +147,110 @@ def test_a_signal_swallowed_by_a_callback_prints_no_traceback(monkeypatch):
     interrupt = KeyboardInterrupt()
     _RaisesWhenCollected(interrupt)
     assert reported == [bug, interrupt]
+
+
+# --- A full disk ------------------------------------------------------------------------------
+
+# Run inside a private mount namespace whose tmpfs FULL is full: the command line's runs (each
+# its own process: a crash is its return code), then the writers with the free-space check
+# switched off, so that the write itself meets the full disk. Prints what happened as JSON.
+_FULL_DISK_DRIVER = """
+import json, os, subprocess, sys
+from pathlib import Path
+
+full, recording = Path(sys.argv[1]), sys.argv[2]
+command = [sys.executable, "-c", "import sys; from bayescal.cli import main; sys.exit(main())"]
+runs = {}
+for name, arguments in {
+    "json": ["--classical-only", "--json", full / "n.json"],
+    "out": ["--terms", "white", "--out", full / "posterior", "--quiet"],
+}.items():
+    done = subprocess.run(
+        [*command, "noise", recording, "--channel", "gyro_x", *map(str, arguments)],
+        capture_output=True, text=True, check=False,
+    )
+    runs[name] = [done.returncode, done.stderr]
+
+import numpy as np
+import xarray as xr
+import bayescal._output as output
+from bayescal._errors import InputError
+from bayescal.recording._series import SpoolWriter
+
+def spool(values):
+    writer = SpoolWriter()
+    try:
+        writer.append(values)
+    except BaseException:
+        writer.abandon()  # as stream_channel does
+        raise
+
+output._check_room = lambda target, size: None
+tree = xr.DataTree(xr.Dataset({"x": ("draw", np.zeros(200_000))}))
+os.environ["BAYESCAL_SPOOL"] = str(full)
+for name, write in {
+    "netcdf": lambda: output.write_netcdf(tree, full / "x.nc"),
+    "json unchecked": lambda: output.write_json(full / "x.json", {"x": list(range(10_000))}),
+    "spool": lambda: spool(np.zeros(200_000)),
+}.items():
+    try:
+        write()
+        runs[name] = "written"
+    except InputError as error:
+        runs[name] = str(error)
+runs["left"] = sorted(os.listdir(full))
+print(json.dumps(runs))
+"""
+
+
+def test_a_full_disk_is_said_with_the_path_and_leaves_nothing(tmp_path):
+    """``noise --json`` and ``noise --out`` into a full file system: exit 2 naming the file,
+    no crash (HDF5's own write to a full disk ended in a segmentation fault), no file left;
+    the writers without their free-space check meet the full disk and say so too. The tmpfs
+    is mounted in a private mount namespace (unshare), where the machine allows one."""
+    if not sys.platform.startswith("linux"):
+        pytest.skip("a tmpfs in a private mount namespace needs Linux")
+    probe = subprocess.run(
+        ["unshare", "--user", "--map-root-user", "--mount", "true"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    if probe.returncode != 0:
+        pytest.skip(f"cannot mount a small tmpfs here (unshare: {probe.stderr.strip()})")
+    rng = np.random.default_rng(4)
+    path = write_csv(
+        tmp_path / "rec.csv",
+        {"time": np.arange(2000) / 100, "gyro_x": 0.1 + 0.01 * rng.standard_normal(2000)},
+    )
+    full = tmp_path / "full"
+    full.mkdir()
+    (tmp_path / "driver.py").write_text(_FULL_DISK_DRIVER)
+    script = (
+        'mount -t tmpfs -o size=256k tmpfs "$1" && '
+        '(dd if=/dev/zero of="$1/filler" bs=4k 2>/dev/null; true) && '
+        'exec "$3" driver.py "$1" "$2"'
+    )
+    environment = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_PLATFORMS": "cpu"}
+    done = subprocess.run(
+        ["unshare", "--user", "--map-root-user", "--mount", "sh", "-c", script, "sh",
+         str(full), str(path), sys.executable],
+        capture_output=True, text=True, cwd=tmp_path, env=environment, timeout=300, check=False,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    runs = json.loads(done.stdout)
+    for name, target in (("json", "n.json"), ("out", "posterior/noise_gyro_x_posterior.nc")):
+        code, stderr = runs[name]
+        assert code == 2, stderr
+        message = stderr.strip()
+        assert "\n" not in message and "Traceback" not in message
+        assert f"{full / target}: not written: it needs" in message, message
+        assert "its file system has 0 B free; free space there or choose another path" in message
+    for name, target in (("netcdf", "x.nc"), ("json unchecked", "x.json")):
+        assert runs[name] == (
+            f"{full / target}: not written: its file system is full; "
+            "free space there or choose another path"
+        )
+    assert runs["spool"].startswith(f"{full}/bayescal-spool-")
+    assert "not written: its file system is full; set BAYESCAL_SPOOL" in runs["spool"]
+    assert runs["left"] == ["filler"]

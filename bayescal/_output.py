@@ -8,7 +8,9 @@ temporary file is private, a result is made to be shared).
 
 Inside :class:`Outputs` (every command of the command line runs in one), the temporaries wait
 until the whole run has succeeded and are then moved into place together; a run that fails or
-is interrupted removes them, and the folders it created, so that it leaves nothing behind. An
+is interrupted removes them, and the folders it created, so that it leaves nothing behind. A
+signal (Ctrl-C, SIGTERM) waits while files move into place or are removed, and while a
+temporary is made and recorded (:func:`signals_deferred`): none is cut in half. An
 output that is one of the run's inputs, or another of its outputs, is refused before any work.
 
 A write the machine refuses — a full disk, a quota, a read-only file system — is an
@@ -28,6 +30,7 @@ import math
 import os
 import re
 import shutil
+import signal
 import tempfile
 from pathlib import Path
 
@@ -109,6 +112,33 @@ def check_folder(path: str | os.PathLike, argument: str) -> Path:
             f"{argument} {folder}: folder '{parent}' is not writable", fix="choose another path"
         )
     return folder
+
+
+_DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def signals_deferred():
+    """Hold SIGINT and SIGTERM while the block runs, then deliver them to the handlers in
+    place before (in the main thread; elsewhere the block just runs): a step that must not
+    be cut in half — files moving into place, a temporary made and recorded for removal —
+    finishes first, and a Ctrl-C then acts as it would have."""
+    held: list[int] = []
+    try:
+        before = {
+            signum: signal.signal(signum, lambda signum, frame: held.append(signum))
+            for signum in _DEFERRED_SIGNALS
+        }
+    except ValueError:  # not the main thread: signals are the main thread's to handle
+        yield
+        return
+    try:
+        yield
+    finally:
+        for signum, handler in before.items():
+            signal.signal(signum, handler)
+        for signum in dict.fromkeys(held):
+            signal.raise_signal(signum)
 
 
 # What an error of a write means to the user, and what to do about it.
@@ -244,9 +274,9 @@ class Outputs:
         folder = check_folder(path, argument)
         self._check_not_input(folder, argument)
         if not folder.exists():
-            with _writing(folder):
+            with signals_deferred(), _writing(folder):
                 folder.mkdir()
-            self._created.append(folder)
+                self._created.append(folder)
         return folder
 
     def stage(self, path) -> Path:
@@ -259,9 +289,9 @@ class Outputs:
                     fix="give each output its own path",
                 )
         self._check_not_input(target, "output")
-        with _writing(target):
+        with signals_deferred(), _writing(target):
             temporary = _temporary_beside(target)
-        self._staged[target] = temporary
+            self._staged[target] = temporary
         return temporary
 
     def temporary_of(self, path) -> Path | None:
@@ -317,14 +347,16 @@ class Outputs:
 
     def __exit__(self, kind, error, traceback) -> None:
         _ACTIVE.reset(self._token)
-        if kind is None:
-            try:
-                self.commit()
-            except BaseException:
+        # All the files move, or all are removed, before a signal acts.
+        with signals_deferred():
+            if kind is None:
+                try:
+                    self.commit()
+                except BaseException:
+                    self.discard()
+                    raise
+            else:
                 self.discard()
-                raise
-        else:
-            self.discard()
 
 
 def staged(path: str | os.PathLike) -> Path:
@@ -353,15 +385,17 @@ def atomic_path(path: str | os.PathLike):
             outputs.unstage(target)
             raise
         return
-    with _writing(target):
-        temporary = _temporary_beside(target)
+    temporary = None
     try:
+        with signals_deferred(), _writing(target):
+            temporary = _temporary_beside(target)
         with _writing(target):
             yield temporary
             os.chmod(temporary, 0o666 & ~_umask())
             os.replace(temporary, target)
     except BaseException:
-        temporary.unlink(missing_ok=True)
+        if temporary is not None:
+            temporary.unlink(missing_ok=True)
         raise
 
 

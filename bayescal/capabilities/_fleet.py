@@ -27,10 +27,12 @@ it (its fit checks, :attr:`~bayescal.NoiseFit.checks`) is left out and reported 
 any other failure (``misfit``).
 """
 
+import contextlib
 import math
 import os
 import pickle
 import re
+import signal
 import sys
 import time
 from collections.abc import Mapping
@@ -591,6 +593,20 @@ class FleetFit:
 # The cluster
 
 
+@contextlib.contextmanager
+def _sigint_ignored():
+    """SIGINT ignored while the block runs (in the main thread; elsewhere left as it is)."""
+    try:
+        before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
 def _client(scheduler, workers: int | None):
     """A Dask client: on a new LocalCluster (scheduler None), an existing cluster (an
     address), or the client given. Returns it, whether to close it, and how it is called."""
@@ -601,7 +617,11 @@ def _client(scheduler, workers: int | None):
 
     if scheduler is None:
         count = workers or os.cpu_count() or 1
-        with warnings.catch_warnings():
+        # The worker processes ignore SIGINT: Ctrl-C at a terminal reaches every process of
+        # its group, and this one alone answers it, closing the cluster (workers of their own
+        # printed tracebacks). A process inherits an ignored signal only from an ignoring
+        # parent, so this one ignores it while they start.
+        with _sigint_ignored(), warnings.catch_warnings():
             # The scheduler's HTTP endpoint moving off a busy port is no news to a user.
             warnings.filterwarnings("ignore", "Port .* is already in use")
             cluster = LocalCluster(
@@ -611,7 +631,11 @@ def _client(scheduler, workers: int | None):
                 dashboard_address=None,
                 silence_logs=logging.ERROR,
             )
-        return Client(cluster), cluster, "local"
+        try:
+            return Client(cluster), cluster, "local"
+        except BaseException:  # an interruption too: the caller has no cluster to close
+            cluster.close()
+            raise
     if workers is not None:
         raise InputError(
             "--workers sets the size of a local cluster; with --scheduler the cluster's own "

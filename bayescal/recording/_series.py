@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._output import write_error
+from .._output import signals_deferred, write_error
 
 BLOCK = 1 << 20
 """Samples per block read (8 MB of float64): large enough that the per-block overhead
@@ -153,11 +153,19 @@ class SpoolWriter:
 
     def __init__(self, folder: Path | None = None, name: str = "series"):
         self._own = folder is None
-        with _spooling(folder or os.environ.get("BAYESCAL_SPOOL") or tempfile.gettempdir()):
-            self.folder = spool_folder() if folder is None else Path(folder)
-        self.path = self.folder / f"{name}.f8"
-        with _spooling(self.path):
-            self._handle = open(self.path, "wb")  # noqa: SIM115 (open across appends)
+        self.folder = None
+        spool = folder or os.environ.get("BAYESCAL_SPOOL") or tempfile.gettempdir()
+        try:
+            # A signal waits until the folder is made and known, so that it is removed below.
+            with signals_deferred(), _spooling(spool):
+                self.folder = spool_folder() if folder is None else Path(folder)
+            self.path = self.folder / f"{name}.f8"
+            with _spooling(self.path):
+                self._handle = open(self.path, "wb")  # noqa: SIM115 (open across appends)
+        except BaseException:  # a full disk, or a signal: no writer, and no folder left
+            if self.folder is not None:
+                _remove(self.folder / f"{name}.f8", self.folder if self._own else None)
+            raise
         self.size = 0
 
     def append(self, values) -> None:

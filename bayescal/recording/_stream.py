@@ -273,10 +273,11 @@ def stream_channel(
     head.require(channel, "channel")
     time_name = None if rate is not None else find_time_column(head, time_column)
     wanted = _raw_names(first_batch.schema.names, {channel, time_name} - {None})
-    writer = SpoolWriter(name=channel.replace("/", "_"))
-    joiner = _Joiner(writer, gaps, source, time_name)
-    bar = _progress_bar(path, progress)
+    writer = bar = None
     try:
+        writer = SpoolWriter(name=channel.replace("/", "_"))
+        joiner = _Joiner(writer, gaps, source, time_name)
+        bar = _progress_bar(path, progress)
         record_start, row = None, 0
         for number, read in enumerate(_row_blocks(path, source, wanted, skip_rows)):
             block = _without_placeholder(read) if number == 0 else read
@@ -310,7 +311,8 @@ def stream_channel(
             )
         spooled = writer.finish()
     except BaseException:
-        writer.abandon()
+        if writer is not None:
+            writer.abandon()
         raise
     finally:
         if bar is not None:

@@ -172,9 +172,9 @@ def test_a_signal_waits_while_the_files_move_into_place(tmp_path, monkeypatch):
 
 
 def test_an_interrupted_sampler_says_nothing(capsys):
-    """emcee prints a traceback of any exception of the log density before passing it on;
-    an interruption there is held to the step's end and raised quietly, nothing evaluated
-    after it."""
+    """emcee's wrapper of the log density prints a traceback of any exception before passing
+    it on; bayescal's sampler calls the log density without it: an interruption there ends
+    the sampling quietly, nothing evaluated after it."""
     from bayescal.inference._mcmc import sample_ensemble
 
     calls = []

@@ -94,10 +94,19 @@ _RAISED = {signal.SIGINT: KeyboardInterrupt, signal.SIGTERM: _Terminated}
 _SAID = {signal.SIGINT: ("interrupted", INTERRUPTED), signal.SIGTERM: ("terminated", TERMINATED)}
 
 
-def _importing(frame) -> bool:
-    """Whether ``frame`` runs inside an import (a module's code, or an extension's)."""
+def _initialising_extension(frame) -> bool:
+    """Whether ``frame`` runs inside the initialisation of a C extension module (or in Python
+    code it calls): an exception there can abort the process (jaxlib's modules, built with
+    nanobind, treat one raised while they create their types as fatal)."""
+    from importlib.machinery import ExtensionFileLoader
+
     while frame is not None:
-        if frame.f_code.co_filename.startswith("<frozen importlib._bootstrap"):
+        code = frame.f_code
+        if (
+            code.co_name in ("create_module", "exec_module")
+            and code.co_filename == "<frozen importlib._bootstrap_external>"
+            and isinstance(frame.f_locals.get("self"), ExtensionFileLoader)
+        ):
             return True
         frame = frame.f_back
     return False
@@ -111,9 +120,9 @@ class _Signals:
     run is — in JAX, emcee, Dask or a writer — so that it unwinds through every ``finally``
     and ``with``: the staged outputs are removed (:class:`~bayescal._output.Outputs`, which
     holds signals while it moves or removes files), a spooled channel and a Dask cluster
-    closed. Inside an import it waits until the import is done (an exception there can abort
-    the process), checking again every 20 ms. It raises once: a second signal while the run
-    unwinds is recorded, not raised into the cleanup. Once the run has settled
+    closed. Inside a C extension's initialisation it waits until that is done (an exception
+    there can abort the process), checking again every 20 ms. It raises once: a second
+    signal while the run unwinds is recorded, not raised into the cleanup. Once the run has settled
     (:meth:`settle`) — its work done and its outputs about to move into place, or its end
     being reported — a signal is only recorded.
 
@@ -142,9 +151,7 @@ class _Signals:
             self.received.append(signum)
         if self._state != "working":
             return
-        if _importing(frame):
-            # An exception inside an import can abort the process: a C extension's module
-            # initialisation (jaxlib's, through nanobind) treats one as fatal.
+        if _initialising_extension(frame):
             self._later(signum)
             return
         self._state = "unwinding"
@@ -242,10 +249,10 @@ def main(argv: list[str] | None = None) -> int:
     """Run ``bayescal`` with ``argv`` (the process's arguments when None); the exit code.
 
     The signal handler (:class:`_Signals`) is in place before the commands are imported and
-    the arguments parsed. Run for the process (``argv`` None) it stays, recording only,
-    until the process exits: a signal in the interpreter's teardown, after the run has
-    ended, changes nothing. Run with ``argv`` (in-process, as the tests do), the handlers
-    before are restored."""
+    the arguments parsed. Run for the process (``argv`` None) it stays, recording only: a
+    signal after the run has ended changes nothing (until the interpreter's last teardown,
+    where Python has put back the default handlers). Run with ``argv`` (in-process, as the
+    tests do), the handlers before are restored."""
     signals = _Signals().install()
     command = None
     try:

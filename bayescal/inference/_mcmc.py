@@ -97,26 +97,13 @@ def sample_ensemble(
     # anchor walker instead of a unit vector (fixed on emcee's main branch, PR #531, not yet
     # released). A fifth of snooker moves made every posterior's sd 2-3 % too small, and a
     # hierarchical population's intervals 7 % too narrow (tests/test_mcmc.py measures it).
-    held: list[BaseException] = []
-
-    def log_density(theta):
-        # emcee prints a traceback of any exception of the log density (a bare except in its
-        # wrapper) before passing it on: an interruption (Ctrl-C, the command line's SIGTERM)
-        # is held until the step ends, every walker's proposal refused, and raised from the
-        # loop below, quietly.
-        if held:
-            return np.full(len(theta), -np.inf)
-        try:
-            return log_posterior_batch(theta)
-        except Exception:
-            raise
-        except BaseException as interruption:
-            held.append(interruption)
-            return np.full(len(theta), -np.inf)
-
     sampler = emcee.EnsembleSampler(
-        n_walkers, dimension, log_density, vectorize=True, moves=emcee.moves.DEMove()
+        n_walkers, dimension, log_posterior_batch, vectorize=True, moves=emcee.moves.DEMove()
     )
+    # emcee wraps the log density to print a traceback of any exception it raises before
+    # passing it on: an interruption (Ctrl-C, the command line's SIGTERM) is to end the run
+    # quietly. With no extra arguments the wrapper adds nothing else, so it is left out.
+    sampler.log_prob_fn = log_posterior_batch
     sampler.random_state = np.random.RandomState(rng.integers(2**31)).get_state()
     spread = np.linalg.cholesky(covariance + 1e-12 * np.eye(dimension))
     state = start + rng.standard_normal((n_walkers, dimension)) @ spread.T
@@ -130,10 +117,7 @@ def sample_ensemble(
     longer_before, converged, chunk = False, False, 250
     while sampler.iteration < max_steps:
         steps = min(chunk, max_steps - sampler.iteration)
-        for result in sampler.sample(state, iterations=steps):
-            state = result
-            if held:
-                raise held[0]
+        state = sampler.run_mcmc(state, steps)
         if bar is not None:
             bar.update(steps)
         tau = sampler.get_autocorr_time(tol=0)

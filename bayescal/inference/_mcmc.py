@@ -20,6 +20,8 @@ import jax
 import numpy as np
 from arviz_stats.base import array_stats
 
+from .._x64 import require_x64  # float64 before any JAX array
+
 MAX_RHAT = 1.01
 MIN_ESS = 400
 ACCEPTANCE_RANGE = (0.1, 0.8)
@@ -66,6 +68,7 @@ def batch_log_density(log_density, model):
     same structure and shapes, and a plain list of arrays costs about half as much to pass on
     each of the sampler's thousands of calls as the module through ``eqx.filter_jit``.
     """
+    require_x64()
     leaves, treedef = jax.tree_util.tree_flatten(model)
     return lambda theta: np.asarray(_walker_log_densities(log_density, treedef, leaves, theta))
 

@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.scipy.stats import norm
 
-from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from .._x64 import require_x64  # float64 before any JAX array
 from ._components import SPECTRAL_TERMS, component_weights
 from ._level import bias_given_noise, level_summary
 from ._whittle import spectral_summary, whittle_log_likelihood
@@ -344,7 +344,13 @@ class NoiseModel(eqx.Module):
         -------
         numpy.ndarray
             The samples, each the average rate over its period, starting at t = 0.
+
+        Raises
+        ------
+        InputError
+            JAX's 64-bit mode was turned off (bayescal turns it on for the process).
         """
+        require_x64()
         key = jax.random.PRNGKey(seed) if isinstance(seed, (int, np.integer)) else seed
         return np.asarray(self.sample(key, n))
 

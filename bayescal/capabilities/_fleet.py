@@ -34,6 +34,7 @@ import pickle
 import re
 import signal
 import sys
+import threading
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -654,6 +655,21 @@ def _client(scheduler, workers: int | None):
     return client, None, "remote"
 
 
+def _quiet_workers(client) -> None:
+    """Silence a local cluster's workers before it closes under them mid-task (an error, an
+    interruption): each would log the scheduler's going away as an error with its traceback,
+    on this process's terminal. At most 2 s; a worker that does not answer is closed as is."""
+    import logging
+
+    def silence():
+        with contextlib.suppress(Exception):
+            client.run(logging.disable, logging.CRITICAL)
+
+    thread = threading.Thread(target=silence, daemon=True)
+    thread.start()
+    thread.join(2.0)
+
+
 def _check_workers(client, address: str) -> int:
     """The number of workers, after checking that each runs this bayescal."""
     try:
@@ -877,6 +893,10 @@ def fit_fleet(
         worker_count = _check_workers(client, address)
         results, sizes = _run_tasks(client, tasks, progress)
         worker_count = max(worker_count, len(client.nthreads()))
+    except BaseException:
+        if kind == "local":
+            _quiet_workers(client)
+        raise
     finally:
         if kind != "client":
             client.close()

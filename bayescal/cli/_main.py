@@ -39,6 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
         _fleet,
         _multi_position,
         _noise,
+        _plan,
         _report,
         _sensors,
         _terms,
@@ -56,6 +57,7 @@ def build_parser() -> argparse.ArgumentParser:
         _discover,
         _sensors,
         _terms,
+        _plan,
         _fleet,
     ):
         command.add_parser(commands)

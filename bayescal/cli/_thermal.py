@@ -97,29 +97,10 @@ def add_parser(commands) -> None:
     compensate.set_defaults(run=run_compensate)
 
 
-def temperature_unit(recording, column: str) -> tuple[str, bool]:
-    """The unit of the temperature column (from its header or name; degC when neither says)
-    and whether the file declares it."""
-    from ..recording._units import parse_unit, unit_from_column_suffix
-
-    declared = recording.header_units.get(column) or unit_from_column_suffix(column)
-    if declared is None:
-        return "degC", False
-    parsed = parse_unit(declared)
-    if parsed.quantity != "temperature":
-        raise InputError(
-            f"the temperature column's unit '{declared}' is not a temperature unit",
-            source=recording.source,
-            column=column,
-            fix="write degC, degF or K in its header, e.g. temperature[degC]",
-        )
-    return parsed.name, True
-
-
 def _channel(args):
     """The gyro channel with its temperature on its grid, the temperature column and its
     unit."""
-    from ..recording._columns import find_temperature_column
+    from ..recording._columns import find_temperature_column, temperature_unit
 
     if not args.channel:
         raise InputError("--channel is required", fix="name the gyro column, e.g. --channel gyro_z")
@@ -291,7 +272,7 @@ def run_update(args) -> int:
 def run_compensate(args) -> int:
     from .._output import write_csv
     from ..capabilities._thermal import load_thermal_calibration
-    from ..recording._columns import find_temperature_column
+    from ..recording._columns import find_temperature_column, temperature_unit
     from ..recording._recording import resolve_unit
 
     declare_outputs([args.file, args.calibration], {"--out": args.out})

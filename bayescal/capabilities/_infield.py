@@ -660,8 +660,15 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
             f"99.9 % chi^2 limit {innovations['upper_limit']:.4g}: the vehicle swayed or moved, "
             "or the noise is larger than the model holds"
         )
-    roll, pitch, heading_coarse = (
-        math.degrees(float(a)) for a in euler_from_dcm(alignment.coarse_attitude)
+    coarse, final = (
+        dict(
+            zip(
+                ("roll", "pitch", "heading"),
+                np.degrees(np.asarray(euler_from_dcm(c))).tolist(),
+                strict=True,
+            )
+        )
+        for c in (alignment.coarse_attitude, attitude)
     )
     notes = list(context["notes"])
     for name, calibration in old.items():
@@ -694,7 +701,8 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
             "stop_s": context["window"][1],
             "latitude_deg": context["latitude"],
             "height_m": context["height"],
-            "coarse_attitude_deg": {"roll": roll, "pitch": pitch, "heading": heading_coarse},
+            "coarse_attitude_deg": coarse,
+            "final_attitude_deg": final,
             "gyro_white_noise": {
                 "value": (alignment.noise["gyro"] / math.radians(1) * 60).tolist(),
                 "unit": "deg/sqrt(h)",

@@ -118,13 +118,19 @@ def test_the_points_and_the_classical_blocks(parks):
     assert classical_sd < bayes_sd
 
 
-def test_the_same_seed_gives_the_same_update(old):
+def test_the_same_seed_gives_the_same_update_and_a_given_aging_samples_nothing(old):
     park = bc.simulate_park(old, seed=11, **PARK)
     runs = [
         bc.infield_update(park.recording, old, latitude=45.0, align=(0, 600), seed=3)
         for _ in range(2)
     ]
     assert runs[0].to_document() == runs[1].to_document()
+    scale = 4 * math.sqrt(old["gyro_x"].covariance[0, 0])
+    given = bc.infield_update(park.recording, old, latitude=45.0, align=(0, 600), drift=scale)
+    assert given.passed and not given.drift["learned"]
+    assert given.drift["scale"] == pytest.approx(scale)
+    assert "nothing sampled" in given.checks["sampler"]["method"]
+    assert given.calibration["gyro_x"].passed
 
 
 @pytest.fixture(scope="module")
@@ -218,6 +224,7 @@ def _temperature_gap(table):
         (None, ("--align", "300:200"), "--align"),
         (None, ("--unit", "rad/s"), "is in deg/s but the channel is in rad/s"),
         (None, ("--taxi", "600:700"), "not yet supported"),
+        (None, ("--drift", "-1"), "--drift '-1'"),
         ("other_channels", (), "not of 'gyro_x'"),
     ],
 )

@@ -86,13 +86,15 @@ class InFieldUpdate:
     axes : dict
         Channel -> whether the alignment informs it, and why.
     projections : dict
-        The north, east and down projections of the bias (mean over the alignment) and of the
-        thermal slope (at the mean temperature), deg/h and deg/h/degC: posterior, prior sd,
-        truth-free flags of what is informed.
+        The north, east and down projections of the gyro biases: ``level`` (mean over the
+        alignment), ``level_at_reference`` (at each gyro's T0: the polynomials' constant) and
+        ``slope`` (at the mean temperature), deg/h and deg/h/degC: posterior summary, prior
+        sd, and whether the alignment informs it.
     drift : dict
         The learned aging scale s, in the calibrations' unit.
     alignment : dict
-        The window, the place, the coarse attitude and the noise densities read from it.
+        The window, the place, the coarse attitude and the computed attitude at the end
+        (deg), and the white-noise densities read from the record.
     notes : tuple of str
         What the run noticed (temperatures outside the calibrated range, ...).
     posterior : object
@@ -335,39 +337,43 @@ def _slope_weights(degree: int, temperature: float, reference: float) -> np.ndar
 
 
 def _projections(alignment, priors, old, heat, posterior, attitude) -> dict:
-    """The north, east and down projections of the gyro biases: their mean over the alignment
-    ("level") and their slope at each gyro's mean temperature, old calibration plus change;
-    posterior summary and prior sd (given s, averaged over its posterior), deg/h and
-    deg/h/degC."""
+    """The north, east and down projections of the gyro biases, old calibration plus change:
+    their mean over the alignment ("level", what the tilt rates measure), their value at each
+    gyro's reference temperature ("level_at_reference", the polynomials' constant: east, the
+    one the heading error hides) and their slope at each gyro's mean temperature; posterior
+    summary and prior sd (given s, averaged over its posterior), deg/h and deg/h/degC."""
     layout, model = alignment.layout, alignment.model
     scale = np.asarray(model.scale)
     drifts = np.quantile(posterior.drift, np.linspace(0.01, 0.99, 50))
     priors_s = [np.asarray(model.prior(s)) for s in drifts]
-    informed = {"north": (True, True), "east": (False, True), "down": (False, False)}
+    informed = {
+        "north": {"level": True, "level_at_reference": True, "slope": True},
+        "east": {"level": False, "level_at_reference": False, "slope": True},
+        "down": {"level": False, "level_at_reference": False, "slope": False},
+    }
     found = {}
     for row, direction in enumerate(informed):
-        for kind in ("level", "slope"):
+        for kind in informed[direction]:
             vector, old_part = np.zeros(len(layout.names)), 0.0
             for axis, (prior, calibration) in enumerate(zip(priors, old.values(), strict=True)):
-                si = parse_unit(calibration.unit).to_si
+                degree, reference = calibration.degree, calibration.reference
                 if kind == "level":
                     weights = prior.powers.mean(axis=0)
-                    old_value = float(np.mean(calibration.bias(heat[:, axis])[0]))
+                elif kind == "slope":
+                    weights = _slope_weights(degree, float(heat[:, axis].mean()), reference)
                 else:
-                    weights = _slope_weights(
-                        calibration.degree, float(heat[:, axis].mean()), calibration.reference
-                    )
-                    old_value = float(weights @ calibration.coefficients)
+                    weights = np.eye(degree + 1)[0]
                 vector[layout.coefficients[axis]] = attitude[row, axis] * weights
-                old_part += attitude[row, axis] * old_value * si
+                old_value = float(weights @ calibration.coefficients)
+                old_part += attitude[row, axis] * old_value * parse_unit(calibration.unit).to_si
             scaled = vector * scale
             variance = np.mean([scaled @ prior_s @ scaled for prior_s in priors_s])
             entry = _summary(
                 (posterior.states @ vector + old_part) / DEG_PER_HOUR,
-                "deg/h" if kind == "level" else "deg/h/degC",
+                "deg/h/degC" if kind == "slope" else "deg/h",
             )
             entry["prior_sd"] = math.sqrt(variance) / DEG_PER_HOUR
-            entry["informed"] = informed[direction][kind == "slope"]
+            entry["informed"] = informed[direction][kind]
             found.setdefault(direction, {})[kind] = entry
     return found
 
@@ -443,7 +449,7 @@ def _classical(alignment, old, heat, attitude, latitude, gravity: float, si: flo
     }
 
 
-def _updated(calibration, draws, si: float, heat, step: dict, diagnostics, drift: dict):
+def _updated(calibration, draws, si: float, heat, step: dict, sampler: dict, drift: dict):
     """``calibration`` with its coefficients' posterior from the alignment."""
     coefficients = calibration.coefficients + draws / si
     low, high = calibration.temperature_range
@@ -458,7 +464,7 @@ def _updated(calibration, draws, si: float, heat, step: dict, diagnostics, drift
                 "coefficient_q05": np.quantile(coefficients, 0.05, axis=0),
                 "coefficient_q95": np.quantile(coefficients, 0.95, axis=0),
                 "degree_scores": {},
-                "diagnostics": diagnostics.as_dict(),
+                "diagnostics": sampler,
             }
         ),
         classical=None,
@@ -508,6 +514,7 @@ def infield_update(
     taxi: tuple[float, float] | None = None,
     track_heading=None,
     seed: int = 0,
+    drift: float | str = "auto",
     gyro_columns=GYROS,
     accel_columns=ACCELEROMETERS,
     temperature=None,
@@ -539,6 +546,11 @@ def infield_update(
         prior).
     seed : int
         Seed of the sampler: the same inputs and seed give the same result.
+    drift : float or "auto"
+        How far each gyro's bias may have aged since the calibration (the drift scale s of
+        :meth:`~bayescal.ThermalCalibration.update`, in the calibrations' unit, e.g. a
+        datasheet's bias repeatability): ``"auto"`` learns it from the alignment, which
+        informs it in only a few directions (see the guide), 0 assumes no aging.
     gyro_columns, accel_columns : tuple of str
         The gyro (x, y, z) and accelerometer columns.
     temperature : str or tuple of str, optional
@@ -573,6 +585,10 @@ def infield_update(
         )
     latitude = check_latitude(latitude)
     window = _window(align)
+    if drift != "auto" and not (isinstance(drift, (int, float)) and 0 <= drift < math.inf):
+        raise InputError(
+            f"drift {drift!r}", fix="give auto, 0 (no aging) or a positive scale in the gyros' unit"
+        )
     if not isinstance(recording, Recording):
         recording = load_recording(recording)
     columns = {"gyro": gyro_columns, "accel": accel_columns, "temperature": temperature}
@@ -604,7 +620,13 @@ def infield_update(
         reference_drift=math.exp(location),
         accel_instability=accel_instability,
     )
-    posterior = sample_alignment(alignment, location=location, seed=seed, progress=progress)
+    posterior = sample_alignment(
+        alignment,
+        location=location,
+        seed=seed,
+        drift=drift if drift == "auto" else drift * si,
+        progress=progress,
+    )
     context = {
         "si": si,
         "unit": first.unit,
@@ -614,6 +636,7 @@ def infield_update(
         "height": height,
         "window": window,
         "notes": notes,
+        "drift": drift,
     }
     return _result(alignment, posterior, old, heat, priors, context)
 
@@ -623,8 +646,15 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
     si, unit = context["si"], context["unit"]
     attitude = alignment.trajectory.attitude[-1]
     heading = np.degrees(posterior.states[:, TILT] @ _heading_row(attitude))
-    diagnostics = posterior.diagnostics
-    drift = {**_summary(posterior.drift / si, unit), "learned": True}
+    if posterior.diagnostics is None:
+        sampler = {
+            "passed": True,
+            "failures": [],
+            "method": "the aging scale was given: one Gaussian posterior, nothing sampled",
+        }
+    else:
+        sampler = posterior.diagnostics.as_dict()
+    drift = {**_summary(posterior.drift / si, unit), "learned": posterior.diagnostics is not None}
     drift["scale"] = drift.pop("mean")
     axes = _axes(attitude)
     new = {}
@@ -639,13 +669,14 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
                 "prior": calibration.origin or "a calibration in memory",
                 "latitude_deg": context["latitude"],
                 "align": list(context["window"]),
+                "drift": context["drift"],
                 "updated": axes[name]["updated"],
                 "why": axes[name]["why"],
             },
         )
         if axes[name]["updated"]:
             draws = posterior.states[:, alignment.layout.coefficients[axis]]
-            new[name] = _updated(calibration, draws, si, heat[:, axis], step, diagnostics, drift)
+            new[name] = _updated(calibration, draws, si, heat[:, axis], step, sampler, drift)
         else:
             new[name] = replace(
                 calibration, provenance=(*calibration.provenance, step), origin=None
@@ -653,7 +684,7 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
     latitude = math.radians(context["latitude"])
     gravity = normal_gravity(context["latitude"], context["height"])
     innovations = _innovation_check(posterior.filtered)
-    failures = list(diagnostics.failures)
+    failures = list(sampler["failures"])
     if not innovations["passed"]:
         failures.append(
             f"the velocity innovations (sum of NIS {innovations['sum_nis']:.4g}) exceed the "
@@ -690,7 +721,7 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
         checks={
             "passed": not failures,
             "failures": failures,
-            "sampler": diagnostics.as_dict(),
+            "sampler": sampler,
             "innovations": innovations,
         },
         axes=axes,

@@ -142,6 +142,14 @@ def _add_infield(steps) -> None:
         metavar="M/S2",
         help="the accelerometers' bias instability, m/s^2 (default 1e-5: navigation grade)",
     )
+    infield.add_argument(
+        "--drift",
+        default="auto",
+        metavar="S|auto",
+        help="how far each gyro's bias may have aged since the calibration, in the gyros' unit "
+        "(a datasheet's bias repeatability, say); auto (default) learns it from the "
+        "alignment, 0 assumes no aging",
+    )
     infield.add_argument("--seed", type=seed, default=0)
     infield.add_argument("--quiet", action="store_true")
     infield.add_argument("--json", metavar="PATH", required=True, help="the result (JSON)")
@@ -414,6 +422,7 @@ def run_infield(args) -> int:
 
     declare_outputs([args.file, args.calibration], {"--json": args.json, "--save": args.save})
     align = _span(args.align, "--align")
+    drift = _parse_drift(args.drift)
     taxi = _span(args.taxi, "--taxi") if args.taxi else None
     if args.accel_instability < 0:
         raise InputError(f"--accel-instability {args.accel_instability:g} must not be negative")
@@ -435,6 +444,7 @@ def run_infield(args) -> int:
         taxi=taxi,
         track_heading=args.track_heading,
         seed=args.seed,
+        drift=drift or 0.0,
         temperature=args.temperature,
         unit=args.unit,
         accel_unit=args.accel_unit,

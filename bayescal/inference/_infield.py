@@ -17,7 +17,14 @@ import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from ..navigation._alignment import DriftProblem, FineAlignment, draw_final_states, drift_problem
-from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
+from ._mcmc import (
+    MAX_STORED_DRAWS,
+    Diagnostics,
+    batch_log_density,
+    diagnose,
+    sample_ensemble,
+    walker_count,
+)
 from ._optimize import maximum_a_posteriori
 
 
@@ -29,7 +36,8 @@ class AlignmentPosterior:
     """(draws,) s, rad/s."""
     states: np.ndarray
     """(draws, n) every state at the alignment's end, in its own unit (unscaled)."""
-    diagnostics: Diagnostics
+    diagnostics: Diagnostics | None
+    """The sampler's checks (None when the drift scale was given: nothing was sampled)."""
     filtered: object
     """The filter's run at the reference s."""
 
@@ -39,27 +47,34 @@ def sample_alignment(
     *,
     location: float,
     seed: int,
+    drift: float | str = "auto",
     max_steps: int = 40_000,
     progress: bool = False,
 ) -> AlignmentPosterior:
     """Sample the drift scale of ``alignment`` (prior of log s centred on ``location``, s in
-    rad/s) and draw the final states from the mixture; seeded."""
+    rad/s) and draw the final states from the mixture; seeded. A given ``drift`` (s, rad/s;
+    0 for none) is taken as known: the states' posterior is then one Gaussian, drawn from as
+    many times as the sampler keeps."""
     reference = math.exp(location)
     filtered = alignment.model.filter(reference)
     problem = drift_problem(alignment, filtered, reference, location)
-    mode = maximum_a_posteriori(DriftProblem.log_posterior, problem, problem.location)
     rng = np.random.default_rng(seed)
-    sampler, done = sample_ensemble(
-        batch_log_density(DriftProblem.log_posterior, problem),
-        mode.theta,
-        mode.covariance,
-        rng,
-        walker_count(mode.theta.size),
-        max_steps,
-        progress,
-    )
-    diagnostics, kept = diagnose(sampler, problem.parameters, done, mode.converged)
-    theta = kept.reshape(-1, kept.shape[-1])
+    if drift == "auto":
+        mode = maximum_a_posteriori(DriftProblem.log_posterior, problem, problem.location)
+        sampler, done = sample_ensemble(
+            batch_log_density(DriftProblem.log_posterior, problem),
+            mode.theta,
+            mode.covariance,
+            rng,
+            walker_count(mode.theta.size),
+            max_steps,
+            progress,
+        )
+        diagnostics, kept = diagnose(sampler, problem.parameters, done, mode.converged)
+        theta = kept.reshape(-1, kept.shape[-1])
+    else:
+        diagnostics = None
+        theta = np.full((MAX_STORED_DRAWS, 1), math.log(drift) if drift > 0 else -np.inf)
     draws = draw_final_states(
         problem,
         filtered.mean[-1],

@@ -39,10 +39,13 @@ def infield_text(document: dict) -> str:
         ):
             lines.append(f"    c{j} {value:.6g} +- {sd:.3g} {unit}")
     drift = document["drift"]
-    lines.append(
-        f"  aging since the calibration (learned): {drift['scale']:.3g} {drift['unit']} "
-        f"[90%: {drift['q05']:.3g}, {drift['q95']:.3g}]"
-    )
+    if drift["learned"]:
+        lines.append(
+            f"  aging since the calibration (learned): {drift['scale']:.3g} {drift['unit']} "
+            f"[90%: {drift['q05']:.3g}, {drift['q95']:.3g}]"
+        )
+    else:
+        lines.append(f"  aging since the calibration (given): {drift['scale']:.3g} {drift['unit']}")
     lines.extend(f"  note: {note}" for note in document["notes"])
     checks = document["checks"]
     lines.append(

@@ -305,7 +305,7 @@ def test_the_drift_evidence_in_closed_form_is_the_filter_rerun(small_alignment):
     values = {}
     for s in (2e-8, 2e-7):
         run = alignment.model.filter(s)
-        prior = -0.5 * ((math.log(s) - math.log(1e-8)) / float(problem.spread[0])) ** 2
+        prior = math.log(s) - math.log1p((s / 1e-8) ** 2)  # half-Cauchy, per log s
         values[s] = (
             float(run.log_likelihood) + prior,
             float(problem.log_posterior(jnp.array([math.log(s)]))),

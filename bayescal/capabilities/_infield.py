@@ -27,6 +27,7 @@ from ..classical._gravity import normal_gravity
 from ..inference._infield import sample_alignment
 from ..models._thermal import _drift_shape
 from ..navigation._alignment import (
+    DRIFT_PRIOR_SCALE,
     MIN_ALIGNMENT_S,
     GyroPrior,
     find_motion,
@@ -609,7 +610,8 @@ def infield_update(
         [gyro[:, axis] - cal.bias(heat[:, axis])[0] for axis, cal in enumerate(old.values())], 1
     )
     priors = _priors(old, heat, gyro.shape[0] / first.rate_hz, si)
-    location = float(np.mean([0.5 * math.log(p.covariance[0, 0]) for p in priors]))
+    sd_c0 = float(np.exp(np.mean([0.5 * math.log(p.covariance[0, 0]) for p in priors])))
+    location = math.log(DRIFT_PRIOR_SCALE * sd_c0)
     alignment = fine_alignment(
         compensated,
         accel,

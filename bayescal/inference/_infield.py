@@ -51,10 +51,10 @@ def sample_alignment(
     max_steps: int = 40_000,
     progress: bool = False,
 ) -> AlignmentPosterior:
-    """Sample the drift scale of ``alignment`` (prior of log s centred on ``location``, s in
-    rad/s) and draw the final states from the mixture; seeded. A given ``drift`` (s, rad/s;
-    0 for none) is taken as known: the states' posterior is then one Gaussian, drawn from as
-    many times as the sampler keeps."""
+    """Sample the drift scale of ``alignment`` (``location``: the log of its half-Cauchy
+    prior's scale, s in rad/s) and draw the final states from the mixture; seeded. A given
+    ``drift`` (s, rad/s; 0 for none) is taken as known: the states' posterior is then one
+    Gaussian, drawn from as many times as the sampler keeps."""
     reference = math.exp(location)
     filtered = alignment.model.filter(reference)
     problem = drift_problem(alignment, filtered, reference, location)

@@ -15,9 +15,7 @@ the vertical counts as vertical.
 """
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
-from os import PathLike
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -25,35 +23,33 @@ from .._errors import HealthCheckError, InputError
 from .._output import to_jsonable
 from ..classical._gravity import normal_gravity
 from ..inference._infield import sample_alignment
-from ..models._thermal import _drift_shape
 from ..navigation._alignment import (
     DRIFT_PRIOR_SCALE,
-    MIN_ALIGNMENT_S,
-    GyroPrior,
     find_motion,
     fine_alignment,
-    mixture_moments,
 )
 from ..navigation._alignment import heading_sensitivity as _heading_row
 from ..navigation._earth import check_latitude
 from ..navigation._error_model import TILT
 from ..navigation._frames import euler_from_dcm
-from ..navigation._tilt_rates import blocks, tilt_rate_points
-from ..recording._columns import find_temperature_column, temperature_unit
+from ..navigation._simulate import ACCELEROMETERS, GYROS
 from ..recording._recording import Recording, load_recording
-from ..recording._units import FLICKER_ALLAN_FACTOR, parse_unit
-from ._thermal import ThermalCalibration, _provenance, load_thermal_calibration
+from ..recording._units import parse_unit
+from ._infield_inputs import alignment_window, gyro_priors, old_calibrations, read_alignment
+from ._infield_summary import (
+    calibration_notes,
+    calibrations,
+    classical,
+    informed_axes,
+    innovation_check,
+    points,
+    projections,
+    summary,
+)
 from ._thermal import save_thermal_calibrations as _save
 
-GYROS = ("gyro_x", "gyro_y", "gyro_z")
-ACCELEROMETERS = ("acc_x", "acc_y", "acc_z")
 ACCEL_INSTABILITY = 1e-5
 """The accelerometers' bias instability assumed, m/s^2 (1 ug: navigation grade)."""
-INFORMED_HORIZONTAL = 0.5
-"""A gyro axis whose horizontal part (sin of its angle from the vertical) is below this is the
-vertical gyro: the alignment does not inform it."""
-DEG_PER_HOUR = math.radians(1) / 3600
-"""rad/s per deg/h."""
 TAXI_LATER = (
     "the taxi's heading measurement (--taxi, --track-heading) is not yet supported (issue 36)"
 )
@@ -190,322 +186,6 @@ class InFieldUpdate:
         )
 
 
-def _window(align) -> tuple[float, float]:
-    try:
-        start, stop = (float(value) for value in align)
-    except (TypeError, ValueError):
-        start = stop = math.nan
-    if not (math.isfinite(start) and math.isfinite(stop) and stop > start >= 0):
-        raise InputError(
-            f"align {align!r}",
-            fix="give the alignment window as (t0, t1), seconds from the first sample, t1 > t0",
-        )
-    if stop - start < MIN_ALIGNMENT_S:
-        raise InputError(
-            f"the alignment window {start:g}:{stop:g} lasts {stop - start:g} s, shorter than "
-            f"the {MIN_ALIGNMENT_S:g} s the fine alignment can use",
-            fix="give a longer still window (the patent's extended alignment: 10-20 minutes)",
-        )
-    return start, stop
-
-
-def _temperature_columns(recording: Recording, temperature) -> list[str]:
-    if temperature is None or (isinstance(temperature, str) and "," not in temperature):
-        return [find_temperature_column(recording, temperature)] * 3
-    names = temperature.split(",") if isinstance(temperature, str) else list(temperature)
-    names = [name.strip() for name in names]
-    if len(names) != 3:
-        raise InputError(
-            f"temperature {temperature!r}", fix="give one column, or one per gyro (x, y, z)"
-        )
-    return [find_temperature_column(recording, name) for name in names]
-
-
-def _read(recording: Recording, window, columns: dict, options: dict):
-    """The gyros (their unit), accelerometers (m/s^2) and per-gyro temperatures in the window,
-    on one grid; the gyro unit, the temperature unit and the channels' notes."""
-    temperatures = _temperature_columns(recording, columns["temperature"])
-    grid = {**options, "start": window[0], "stop": window[1], "at_rest": False}
-    gyros = [
-        recording.channel(name, unit=columns["unit"], temperature=temperatures[axis], **grid)
-        for axis, name in enumerate(columns["gyro"])
-    ]
-    accels = [
-        recording.channel(name, unit=columns["accel_unit"], **grid) for name in columns["accel"]
-    ]
-    kinds = [
-        *(("angular_rate", "an angular rate"),) * 3,
-        *(("acceleration", "an acceleration"),) * 3,
-    ]
-    for channel, (quantity, kind) in zip((*gyros, *accels), kinds, strict=True):
-        if parse_unit(channel.unit).quantity != quantity:
-            raise InputError(
-                f"unit {channel.unit} is not {kind}",
-                source=recording.source,
-                column=channel.channel,
-                fix="pass --unit deg/s for the gyros (--accel-unit m/s^2 for the accelerometers)",
-            )
-    units = {g.unit for g in gyros}
-    if len(units) > 1 or len({c.values.size for c in (*gyros, *accels)}) > 1:
-        raise InputError(
-            "the gyros and accelerometers do not share one unit and sample grid",
-            source=recording.source,
-            fix="give the gyros one unit (--unit) and the same time column",
-        )
-    if gyros[0].duration_s < window[1] - window[0] - 1.5 / gyros[0].rate_hz:
-        raise InputError(
-            f"the recording ends at {gyros[0].stop_s:.6g} s, inside the alignment window "
-            f"{window[0]:g}:{window[1]:g}",
-            source=recording.source,
-            fix="give a window inside the recording",
-        )
-    heat_units = {temperature_unit(recording, name)[0] for name in temperatures}
-    if len(heat_units) > 1:
-        raise InputError("the temperature columns use different units", source=recording.source)
-    gyro = np.stack([g.values for g in gyros], axis=1)
-    accel = np.stack([a.values * parse_unit(a.unit).to_si for a in accels], axis=1)
-    heat = np.stack([g.temperature for g in gyros], axis=1)
-    notes = tuple(dict.fromkeys(note for c in (*gyros, *accels) for note in c.notes))
-    return gyro, accel, heat, gyros[0], heat_units.pop(), notes
-
-
-def _old_calibrations(calibration, names, unit: str, heat_unit: str) -> dict:
-    if isinstance(calibration, (str, PathLike)):
-        return {
-            name: load_thermal_calibration(
-                calibration, channel=name, unit=unit, temperature_unit=heat_unit
-            )
-            for name in names
-        }
-    given = list(calibration.values() if isinstance(calibration, Mapping) else calibration)
-    if not all(isinstance(item, ThermalCalibration) for item in given):
-        raise InputError(
-            "calibration: give a calibration file, or ThermalCalibration objects (a mapping or "
-            "a list)"
-        )
-    found = {item.channel: item for item in given}
-    for name in names:
-        if name not in found:
-            raise InputError(
-                f"the calibration holds {', '.join(found) or 'no channel'}, not '{name}'",
-                fix="give one thermal calibration per gyro, named as its column",
-            )
-        old = found[name]
-        if old.unit != unit or old.temperature_unit != heat_unit:
-            raise InputError(
-                f"the calibration of '{name}' is in {old.unit} per {old.temperature_unit}, the "
-                f"recording in {unit} per {heat_unit}",
-                fix="pass --unit to match, or give a calibration in the recording's units",
-            )
-    return {name: found[name] for name in names}
-
-
-def _priors(old: dict, heat, duration_s: float, si: float) -> tuple[GyroPrior, ...]:
-    priors = []
-    for axis, calibration in enumerate(old.values()):
-        noise = calibration.noise
-        flicker = noise.get("B", {}).get("mean", 0.0) * si
-        walk = noise.get("K", {}).get("mean", 0.0) * si
-        powers = (heat[:, axis, None] - calibration.reference) ** np.arange(calibration.degree + 1)
-        priors.append(
-            GyroPrior(
-                powers=powers,
-                covariance=np.asarray(calibration.covariance) * si**2,
-                drift_shape=_drift_shape(
-                    calibration.degree, calibration.reference, calibration.temperature_range
-                ),
-                instability=walk**2 + 9 * FLICKER_ALLAN_FACTOR * flicker**2 / duration_s,
-            )
-        )
-    return tuple(priors)
-
-
-def _summary(draws, unit: str) -> dict:
-    draws = np.ravel(draws)
-    return {
-        "mean": float(draws.mean()),
-        "sd": float(draws.std(ddof=1)),
-        "q05": float(np.quantile(draws, 0.05)),
-        "q95": float(np.quantile(draws, 0.95)),
-        "unit": unit,
-    }
-
-
-def _slope_weights(degree: int, temperature: float, reference: float) -> np.ndarray:
-    """d/dT of (T - T0)^j at ``temperature``, j = 0..degree."""
-    power = np.arange(degree + 1)
-    return power * (temperature - reference) ** np.maximum(power - 1, 0)
-
-
-def _projections(alignment, priors, old, heat, posterior, attitude) -> dict:
-    """The north, east and down projections of the gyro biases, old calibration plus change:
-    their mean over the alignment ("level", what the tilt rates measure), their value at each
-    gyro's reference temperature ("level_at_reference", the polynomials' constant: east, the
-    one the heading error hides) and their slope at each gyro's mean temperature; posterior
-    summary and prior sd (given s, averaged over its posterior), deg/h and deg/h/degC."""
-    layout, model = alignment.layout, alignment.model
-    scale = np.asarray(model.scale)
-    drifts = np.quantile(posterior.drift, np.linspace(0.01, 0.99, 50))
-    priors_s = [np.asarray(model.prior(s)) for s in drifts]
-    informed = {
-        "north": {"level": True, "level_at_reference": True, "slope": True},
-        "east": {"level": False, "level_at_reference": False, "slope": True},
-        "down": {"level": False, "level_at_reference": False, "slope": False},
-    }
-    found = {}
-    for row, direction in enumerate(informed):
-        for kind in informed[direction]:
-            vector, old_part = np.zeros(len(layout.names)), 0.0
-            for axis, (prior, calibration) in enumerate(zip(priors, old.values(), strict=True)):
-                degree, reference = calibration.degree, calibration.reference
-                if kind == "level":
-                    weights = prior.powers.mean(axis=0)
-                elif kind == "slope":
-                    weights = _slope_weights(degree, float(heat[:, axis].mean()), reference)
-                else:
-                    weights = np.eye(degree + 1)[0]
-                vector[layout.coefficients[axis]] = attitude[row, axis] * weights
-                old_value = float(weights @ calibration.coefficients)
-                old_part += attitude[row, axis] * old_value * parse_unit(calibration.unit).to_si
-            scaled = vector * scale
-            variance = np.mean([scaled @ prior_s @ scaled for prior_s in priors_s])
-            entry = _summary(
-                (posterior.states @ vector + old_part) / DEG_PER_HOUR,
-                "deg/h/degC" if kind == "slope" else "deg/h",
-            )
-            entry["prior_sd"] = math.sqrt(variance) / DEG_PER_HOUR
-            entry["informed"] = informed[direction][kind]
-            found.setdefault(direction, {})[kind] = entry
-    return found
-
-
-def _points(alignment, old, heat, posterior, si: float) -> dict:
-    """Each gyro's bias at each block's middle from the smoother: the old calibration plus the
-    change of its coefficients and its instability, under the posterior mixture over s."""
-    layout, scale = alignment.layout, np.asarray(alignment.model.scale)
-    means, covariances = (np.asarray(x) for x in alignment.model.smooth(posterior.filtered))
-    block = layout.all_coefficients
-    draws = posterior.states[:, block] / scale[block]
-    steps = [int(index[index.size // 2]) for index in blocks(alignment.times)]
-    found = {}
-    for axis, (name, calibration) in enumerate(old.items()):
-        samples = [min(k * alignment.step_samples, heat.shape[0] - 1) for k in steps]
-        temperature = heat[samples, axis]
-        vectors = np.zeros((len(steps), len(layout.names)))
-        powers = np.arange(calibration.degree + 1)
-        vectors[:, layout.coefficients[axis]] = (
-            temperature[:, None] - calibration.reference
-        ) ** powers
-        if layout.walks[axis] is not None:
-            vectors[:, layout.walks[axis]] = 1.0
-        mean, sd = mixture_moments(means[steps], covariances[steps], vectors * scale, block, draws)
-        found[name] = {
-            "time_s": alignment.times[steps],
-            "temperature": temperature,
-            "bias": calibration.bias(temperature)[0] + mean / si,
-            "sd": sd / si,
-            "unit": calibration.unit,
-        }
-    return found
-
-
-def _classical(alignment, old, heat, attitude, latitude, gravity: float, si: float) -> dict:
-    """The patent's tilt rates block by block (:mod:`bayescal.navigation._tilt_rates`), as
-    north and east points and as each gyro's points (its vertical part from the old
-    calibration)."""
-    rows = tilt_rate_points(
-        alignment.times, alignment.trajectory.velocity[:, :2], latitude, gravity
-    )
-    axes = {}
-    for axis, (name, calibration) in enumerate(old.items()):
-        points = []
-        for row in rows:
-            k = int(np.argmin(np.abs(alignment.times - row["time_s"])))
-            temperature = float(heat[min(k * alignment.step_samples, heat.shape[0] - 1), axis])
-            change = attitude[0, axis] * row["north"] + attitude[1, axis] * row["east_less_heading"]
-            sd = math.hypot(attitude[0, axis] * row["north_sd"], attitude[1, axis] * row["east_sd"])
-            points.append(
-                {
-                    "time_s": row["time_s"],
-                    "temperature": temperature,
-                    "bias": float(calibration.bias(temperature)[0]) + change / si,
-                    "sd": sd / si,
-                }
-            )
-        axes[name] = {"points": points, "unit": calibration.unit}
-    blocks_deg_h = [
-        {
-            key: value / DEG_PER_HOUR if key not in ("time_s",) else value
-            for key, value in row.items()
-        }
-        for row in rows
-    ]
-    return {
-        "method": "tilt rates from the curvature of the velocity error, block by block "
-        "(quadratic least squares, residuals taken as independent); the east points include "
-        "the heading error's Earth-rate equivalent, the vertical part is the old calibration's",
-        "blocks": blocks_deg_h,
-        "block_unit": "deg/h",
-        "axes": axes,
-    }
-
-
-def _updated(calibration, draws, si: float, heat, step: dict, sampler: dict, drift: dict):
-    """``calibration`` with its coefficients' posterior from the alignment."""
-    coefficients = calibration.coefficients + draws / si
-    low, high = calibration.temperature_range
-    return replace(
-        calibration,
-        coefficients=coefficients.mean(axis=0),
-        covariance=np.cov(coefficients.T).reshape(calibration.degree + 1, -1),
-        temperature_range=(min(low, float(heat.min())), max(high, float(heat.max()))),
-        provenance=(*calibration.provenance, step),
-        bayesian=to_jsonable(
-            {
-                "coefficient_q05": np.quantile(coefficients, 0.05, axis=0),
-                "coefficient_q95": np.quantile(coefficients, 0.95, axis=0),
-                "degree_scores": {},
-                "diagnostics": sampler,
-            }
-        ),
-        classical=None,
-        offsets=None,
-        drift=drift,
-        posterior=None,
-        origin=None,
-    )
-
-
-def _axes(attitude) -> dict:
-    axes = {}
-    for axis, name in enumerate(GYROS):
-        horizontal = math.hypot(attitude[0, axis], attitude[1, axis])
-        tilt = math.degrees(math.asin(min(1.0, horizontal)))
-        informed = horizontal >= INFORMED_HORIZONTAL
-        why = (
-            f"{tilt:.0f} deg from the vertical: its bias projects on north and east, so the "
-            "north projection and the thermal slopes are informed; the east level is one "
-            "quantity with the heading error (kept at its prior until a taxi or a heading "
-            "reference)"
-            if informed
-            else f"{tilt:.0f} deg from the vertical: the alignment sees a vertical gyro's bias "
-            "only through the heading's slow drift, which the east bias hides; not updated"
-        )
-        axes[name] = {"informed_by_alignment": informed, "updated": informed, "why": why}
-    return axes
-
-
-def _innovation_check(filtered) -> dict:
-    """The velocity innovations against the chi^2 their model gives them: larger ones mean
-    motion or noise the model does not hold."""
-    from scipy import stats
-
-    total = float(np.sum(filtered.normalized_innovation))
-    dof = int(np.sum(filtered.observed))
-    limit = float(stats.chi2.ppf(0.999, dof))
-    return {"sum_nis": total, "dof": dof, "upper_limit": limit, "passed": total <= limit}
-
-
 def infield_update(
     recording,
     calibration,
@@ -585,7 +265,7 @@ def infield_update(
             fix="leave them out: the east bias level then stays at its prior, as the result says",
         )
     latitude = check_latitude(latitude)
-    window = _window(align)
+    window = alignment_window(align)
     if drift != "auto" and not (isinstance(drift, (int, float)) and 0 <= drift < math.inf):
         raise InputError(
             f"drift {drift!r}", fix="give auto, 0 (no aging) or a positive scale in the gyros' unit"
@@ -595,8 +275,8 @@ def infield_update(
     columns = {"gyro": gyro_columns, "accel": accel_columns, "temperature": temperature}
     columns |= {"unit": unit, "accel_unit": accel_unit}
     options = {"rate": rate, "time_column": time_column, "time_unit": time_unit}
-    gyro, accel, heat, first, heat_unit, notes = _read(recording, window, columns, options)
-    old = _old_calibrations(calibration, gyro_columns, first.unit, heat_unit)
+    gyro, accel, heat, first, heat_unit, notes = read_alignment(recording, window, columns, options)
+    old = old_calibrations(calibration, gyro_columns, first.unit, heat_unit)
     si = parse_unit(first.unit).to_si
     moved = find_motion(gyro * si, accel, first.rate_hz)
     if moved is not None:
@@ -609,7 +289,7 @@ def infield_update(
     compensated = si * np.stack(
         [gyro[:, axis] - cal.bias(heat[:, axis])[0] for axis, cal in enumerate(old.values())], 1
     )
-    priors = _priors(old, heat, gyro.shape[0] / first.rate_hz, si)
+    priors = gyro_priors(old, heat, gyro.shape[0] / first.rate_hz, si)
     sd_c0 = float(np.exp(np.mean([0.5 * math.log(p.covariance[0, 0]) for p in priors])))
     location = math.log(DRIFT_PRIOR_SCALE * sd_c0)
     alignment = fine_alignment(
@@ -656,36 +336,13 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
         }
     else:
         sampler = posterior.diagnostics.as_dict()
-    drift = {**_summary(posterior.drift / si, unit), "learned": posterior.diagnostics is not None}
+    drift = {**summary(posterior.drift / si, unit), "learned": posterior.diagnostics is not None}
     drift["scale"] = drift.pop("mean")
-    axes = _axes(attitude)
-    new = {}
-    for axis, (name, calibration) in enumerate(old.items()):
-        step = _provenance(
-            "infield",
-            source=context["source"],
-            channel=name,
-            n_samples=heat.shape[0],
-            seed=context["seed"],
-            extra={
-                "prior": calibration.origin or "a calibration in memory",
-                "latitude_deg": context["latitude"],
-                "align": list(context["window"]),
-                "drift": context["drift"],
-                "updated": axes[name]["updated"],
-                "why": axes[name]["why"],
-            },
-        )
-        if axes[name]["updated"]:
-            draws = posterior.states[:, alignment.layout.coefficients[axis]]
-            new[name] = _updated(calibration, draws, si, heat[:, axis], step, sampler, drift)
-        else:
-            new[name] = replace(
-                calibration, provenance=(*calibration.provenance, step), origin=None
-            )
+    axes = informed_axes(attitude, list(old))
+    new = calibrations(alignment, posterior, old, heat, axes, sampler, drift, context)
     latitude = math.radians(context["latitude"])
     gravity = normal_gravity(context["latitude"], context["height"])
-    innovations = _innovation_check(posterior.filtered)
+    innovations = innovation_check(posterior.filtered)
     failures = list(sampler["failures"])
     if not innovations["passed"]:
         failures.append(
@@ -703,23 +360,15 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
         )
         for c in (alignment.coarse_attitude, attitude)
     )
-    notes = list(context["notes"])
-    for name, calibration in old.items():
-        outside = calibration.outside_range(heat[:, list(old).index(name)])
-        if outside.any():
-            notes.append(
-                f"{name}: {100 * outside.mean():.3g} % of the alignment lies outside the "
-                f"calibrated range {calibration.temperature_range}: the old polynomial is "
-                "extrapolated there"
-            )
+    notes = calibration_notes(old, heat, axes, posterior.drift, context)
     return InFieldUpdate(
         calibration=new,
         heading_error={
-            **_summary(heading, "deg"),
+            **summary(heading, "deg"),
             "definition": "computed minus true heading at the alignment's end",
         },
-        points=_points(alignment, old, heat, posterior, si),
-        classical=_classical(alignment, old, heat, attitude, latitude, gravity, si),
+        points=points(alignment, old, heat, posterior, si),
+        classical=classical(alignment, old, heat, attitude, latitude, gravity, si),
         checks={
             "passed": not failures,
             "failures": failures,
@@ -727,7 +376,7 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
             "innovations": innovations,
         },
         axes=axes,
-        projections=_projections(alignment, priors, old, heat, posterior, attitude),
+        projections=projections(alignment, priors, old, heat, posterior, attitude),
         drift=drift,
         alignment={
             "start_s": context["window"][0],

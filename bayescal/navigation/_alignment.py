@@ -259,6 +259,73 @@ def white_noise_density(values, rate_hz: float) -> np.ndarray:
     return spread / math.sqrt(2) / math.sqrt(rate_hz)
 
 
+def _dynamics(trajectory, priors, layout: Layout, size: int, count: int, height, gravity):
+    """F of the whole state per interval (the error model at the interval's middle, the
+    temperature powers averaged over it), and the sensors' input matrices there."""
+    middle = np.arange(count - 1) * size + size // 2
+    dynamics, gyro_input, accel_input = (
+        np.asarray(x)
+        for x in error_dynamics(
+            trajectory.latitude[middle],
+            height,
+            trajectory.velocity[middle],
+            trajectory.attitude[middle],
+            np.full(middle.size, gravity),
+        )
+    )
+    n, nav = len(layout.names), layout.navigation
+    full = np.zeros((count - 1, n, n))
+    full[:, nav, nav] = dynamics
+    full[:, nav, layout.accel] = accel_input
+    for axis, prior in enumerate(priors):
+        powers = _interval_means(prior.powers, size, count)
+        full[:, nav, layout.coefficients[axis]] = gyro_input[:, :, axis, None] * powers[:, None, :]
+        if layout.walks[axis] is not None:
+            full[:, nav, layout.walks[axis]] = gyro_input[:, :, axis]
+    return full, gyro_input, accel_input
+
+
+def _noise(layout: Layout, priors, inputs, densities, accel_walk: float):
+    """The white noise's power spectral density matrix per interval: the gyros' and
+    accelerometers' white noise through their input matrices, the random walks'."""
+    gyro_input, accel_input = inputs
+    gyro_density, accel_density = densities
+    nav = layout.navigation
+    noise = np.zeros((gyro_input.shape[0], len(layout.names), len(layout.names)))
+    noise[:, nav, nav] = np.einsum("kia,a,kja->kij", gyro_input, gyro_density**2, gyro_input)
+    noise[:, nav, nav] += np.einsum("kia,a,kja->kij", accel_input, accel_density**2, accel_input)
+    noise[:, layout.accel, layout.accel] = accel_walk * np.eye(3)
+    for axis, prior in enumerate(priors):
+        if layout.walks[axis] is not None:
+            noise[:, layout.walks[axis], layout.walks[axis]] = prior.instability
+    return noise
+
+
+def _prior(layout: Layout, priors, reference_drift: float, duration: float):
+    """The prior covariance of x_0 without drift (the coarse alignment's tilts, the
+    accelerometer biases, the calibrations' coefficients), each state's drift per unit s, and
+    the states' scales (their prior sd at the reference s)."""
+    n = len(layout.names)
+    prior = np.zeros((n, n))
+    tilt = np.arange(TILT.start, TILT.stop)
+    prior[tilt, tilt] = np.array([TILT_PRIOR, TILT_PRIOR, HEADING_PRIOR]) ** 2
+    prior[layout.accel, layout.accel] = ACCEL_BIAS_PRIOR**2 * np.eye(3)
+    shape = np.zeros(n)
+    for axis, gyro in enumerate(priors):
+        block = layout.coefficients[axis]
+        prior[block, block] = gyro.covariance
+        shape[block] = gyro.drift_shape
+    scale = np.sqrt(np.diag(prior) + (reference_drift * shape) ** 2)
+    # Position and velocity start known (the vehicle is still where it is): scaled by sizes
+    # their errors reach, 1 m and 1 cm/s.
+    scale[POSITION] = 1.0
+    scale[VELOCITY] = 0.01
+    for axis, gyro in enumerate(priors):
+        if layout.walks[axis] is not None:
+            scale[layout.walks[axis]] = math.sqrt(gyro.instability * duration)
+    return prior, shape, scale
+
+
 def fine_alignment(
     gyro,
     accel,
@@ -293,65 +360,19 @@ def fine_alignment(
     gravity = normal_gravity(math.degrees(latitude), height)
     layout = _layout(priors)
     n = len(layout.names)
-    # The error model at each interval's middle; the temperature powers averaged over it.
-    middle = np.arange(count - 1) * size + size // 2
-    dynamics, gyro_input, accel_input = (
-        np.asarray(x)
-        for x in error_dynamics(
-            trajectory.latitude[middle],
-            height,
-            trajectory.velocity[middle],
-            trajectory.attitude[middle],
-            np.full(middle.size, gravity),
-        )
-    )
-    full = np.zeros((count - 1, n, n))
-    nav = layout.navigation
-    full[:, nav, nav] = dynamics
-    full[:, nav, layout.accel] = accel_input
-    for axis, prior in enumerate(priors):
-        powers = _interval_means(prior.powers, size, count)
-        full[:, nav, layout.coefficients[axis]] = gyro_input[:, :, axis, None] * powers[:, None, :]
-        if layout.walks[axis] is not None:
-            full[:, nav, layout.walks[axis]] = gyro_input[:, :, axis]
-    gyro_density = white_noise_density(gyro, rate_hz)
-    accel_density = white_noise_density(accel, rate_hz)
-    noise = np.zeros((count - 1, n, n))
-    noise[:, nav, nav] = np.einsum("kia,a,kja->kij", gyro_input, gyro_density**2, gyro_input)
-    noise[:, nav, nav] += np.einsum("kia,a,kja->kij", accel_input, accel_density**2, accel_input)
+    full, *inputs = _dynamics(trajectory, priors, layout, size, count, height, gravity)
+    densities = (white_noise_density(gyro, rate_hz), white_noise_density(accel, rate_hz))
     accel_walk = 9 * FLICKER_ALLAN_FACTOR * accel_instability**2 / duration
-    noise[:, layout.accel, layout.accel] = accel_walk * np.eye(3)
-    for axis, prior in enumerate(priors):
-        if layout.walks[axis] is not None:
-            noise[:, layout.walks[axis], layout.walks[axis]] = prior.instability
+    noise = _noise(layout, priors, inputs, densities, accel_walk)
     transition, process = discretize(jnp.asarray(full), jnp.asarray(noise), step_s)
-    transition = jnp.concatenate([jnp.eye(n)[None], transition])
-    process = jnp.concatenate([jnp.zeros((1, n, n)), process])
-    # The prior: the coarse alignment's tilts, the accelerometer biases, the coefficients.
-    prior = np.zeros((n, n))
-    tilt = np.arange(TILT.start, TILT.stop)
-    prior[tilt, tilt] = np.array([TILT_PRIOR, TILT_PRIOR, HEADING_PRIOR]) ** 2
-    prior[layout.accel, layout.accel] = ACCEL_BIAS_PRIOR**2 * np.eye(3)
-    shape = np.zeros(n)
-    for axis, prior_i in enumerate(priors):
-        block = layout.coefficients[axis]
-        prior[block, block] = prior_i.covariance
-        shape[block] = prior_i.drift_shape
-    scale = np.sqrt(np.diag(prior) + (reference_drift * shape) ** 2)
-    # Position and velocity start known (the vehicle is still where it is): scaled by sizes
-    # their errors reach, 1 m and 1 cm/s.
-    scale[POSITION] = 1.0
-    scale[VELOCITY] = 0.01
-    for axis, prior_i in enumerate(priors):
-        if layout.walks[axis] is not None:
-            scale[layout.walks[axis]] = math.sqrt(prior_i.instability * duration)
+    prior, shape, scale = _prior(layout, priors, reference_drift, duration)
     observation = np.zeros((count, 2, n))
     observation[:, 0, VELOCITY.start] = observation[:, 1, VELOCITY.start + 1] = 1.0
     measured = trajectory.velocity[::size][:count, :2].copy()
     measured[0] = np.nan
     space = StateSpace(
-        transition,
-        process,
+        jnp.concatenate([jnp.eye(n)[None], transition]),
+        jnp.concatenate([jnp.zeros((1, n, n)), process]),
         jnp.asarray(observation),
         jnp.broadcast_to(velocity_noise**2 * jnp.eye(2), (count, 2, 2)),
     ).scaled(scale)
@@ -376,7 +397,7 @@ def fine_alignment(
             attitude=trajectory.attitude[steps],
         ),
         coarse_attitude=attitude,
-        noise={"gyro": gyro_density, "accel": accel_density},
+        noise=dict(zip(("gyro", "accel"), densities, strict=True)),
         step_samples=size,
     )
 

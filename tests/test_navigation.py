@@ -23,11 +23,12 @@ from bayescal.navigation._frames import dcm_from_euler, euler_from_dcm
 from bayescal.navigation._kalman import StateSpace, kalman_filter, rts_smoother
 from bayescal.navigation._strapdown import mechanize
 
-pyins = pytest.importorskip("pyins")
-from pyins import error_model as pyins_error_model  # noqa: E402
-from pyins import sim as pyins_sim  # noqa: E402
-from pyins import strapdown as pyins_strapdown  # noqa: E402
-from pyins import transform as pyins_transform  # noqa: E402
+
+def _oracle(name: str):
+    """A module of the oracle, pyins (the test extra's python-ins): its tests skip without it,
+    the rest of this file does not need it."""
+    return pytest.importorskip(f"pyins.{name}")
+
 
 PARK = {"lla": (45.0, 10.0, 0.0), "rph": (1.0, -2.0, 30.0)}
 GYRO_BIAS = np.array([1e-7, -2e-7, 3e-8])  # rad/s, about 0.02 deg/h
@@ -38,7 +39,7 @@ def _park_imu(dt: float, duration: float):
     time = np.arange(round(duration / dt) + 1) * dt
     lla = np.tile(PARK["lla"], (time.size, 1))
     rph = np.tile(PARK["rph"], (time.size, 1))
-    return pyins_sim.generate_imu(time, lla, rph, sensor_type="increment")
+    return _oracle("sim").generate_imu(time, lla, rph, sensor_type="increment")
 
 
 def test_the_mechanization_agrees_with_pyins_over_a_20_minute_park():
@@ -46,6 +47,7 @@ def test_the_mechanization_agrees_with_pyins_over_a_20_minute_park():
     error) integrated by pyins and by bayescal at 100 Hz for 20 minutes: velocity within 1e-6
     of its largest value (about 1 m/s), attitude and position as close. The simulator's ideal
     readings of a still body are pyins's mean readings to 1e-10."""
+    pyins_strapdown, pyins_transform = _oracle("strapdown"), _oracle("transform")
     dt = 0.01
     trajectory, imu = _park_imu(dt, 1200.0)
     gyro_cols, accel_cols = ["gyro_x", "gyro_y", "gyro_z"], ["accel_x", "accel_y", "accel_z"]
@@ -96,6 +98,7 @@ def test_the_error_model_is_pyins_model_and_propagates_as_pyins_does():
     exact (Van Loan) propagation of an initial error and constant sensor biases agrees to 1e-6
     with pyins's first-order propagation extrapolated to a zero step (Richardson: its error
     falls as the step)."""
+    pyins_sim, pyins_error_model = _oracle("sim"), _oracle("error_model")
     trajectory, _ = pyins_sim.generate_sine_velocity_motion(
         0.1, 300, [50, 60, 0], [3, -4, 0], velocity_change_amplitude=[2, 3, 0]
     )
@@ -154,9 +157,8 @@ def test_the_error_model_is_pyins_model_and_propagates_as_pyins_does():
 
 def _as_series(values):
     import pandas as pd
-    from pyins.util import TRAJECTORY_ERROR_COLS
 
-    return pd.Series(values, index=TRAJECTORY_ERROR_COLS)
+    return pd.Series(values, index=_oracle("util").TRAJECTORY_ERROR_COLS)
 
 
 @pytest.mark.parametrize("sign, bound", [(1, "below"), (-1, "above")])

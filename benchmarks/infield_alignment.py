@@ -162,10 +162,11 @@ def report(rows: list[dict], drift_learned: bool = True) -> None:
         ("heading", None, "deg"),
     ):
         error, sd, prior, covered = (column(name, i) for i in range(4))
+        z = error / sd
         line = (
             f"{name:24} posterior sd {np.mean(sd):.3g} (median {np.median(sd):.3g}), RMS error "
             f"{np.sqrt(np.mean(error**2)):.3g} {unit}; 90 % intervals cover "
-            f"{100 * np.mean(covered):.1f} %"
+            f"{100 * np.mean(covered):.1f} %; error / sd: mean {z.mean():+.2f}, sd {z.std():.2f}"
         )
         if name != "heading":
             line += f"; sd / prior sd {np.mean(sd / prior):.3f} (min {np.min(sd / prior):.3f})"

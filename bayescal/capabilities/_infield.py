@@ -289,7 +289,7 @@ def infield_update(
     compensated = si * np.stack(
         [gyro[:, axis] - cal.bias(heat[:, axis])[0] for axis, cal in enumerate(old.values())], 1
     )
-    priors = gyro_priors(old, heat, gyro.shape[0] / first.rate_hz, si)
+    priors = gyro_priors(old, heat, first.rate_hz, si)
     sd_c0 = float(np.exp(np.mean([0.5 * math.log(p.covariance[0, 0]) for p in priors])))
     location = math.log(DRIFT_PRIOR_SCALE * sd_c0)
     alignment = fine_alignment(

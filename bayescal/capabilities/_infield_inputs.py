@@ -9,6 +9,7 @@ from os import PathLike
 import numpy as np
 
 from .._errors import InputError
+from ..models._components import block_covariance_basis, component_weights
 from ..models._thermal import _drift_shape
 from ..navigation._alignment import MIN_ALIGNMENT_S, GyroPrior
 from ..recording._columns import find_temperature_column, temperature_unit
@@ -127,12 +128,22 @@ def old_calibrations(calibration, names, unit: str, heat_unit: str) -> dict:
     return {name: found[name] for name in names}
 
 
-def gyro_priors(old: dict, heat, duration_s: float, si: float) -> tuple[GyroPrior, ...]:
+def gyro_priors(old: dict, heat, rate_hz: float, si: float) -> tuple[GyroPrior, ...]:
+    """Each gyro's prior for the fine alignment, in SI units: its temperature powers, the
+    calibration's covariance and drift shape, and its bias instability as an offset and a
+    random walk (:mod:`bayescal.navigation._alignment`): the walk's Allan variance matches the
+    flicker floor at a third of the alignment, the offset makes up the exact variance of the
+    flicker's mean over it (:func:`bayescal.models._components.block_covariance_basis`)."""
+    count = heat.shape[0]
+    duration = count / rate_hz
+    window = block_covariance_basis(np.array([0]), np.array([count]), rate_hz)[:, 0, 0]
     priors = []
     for axis, calibration in enumerate(old.values()):
         noise = calibration.noise
         flicker = noise.get("B", {}).get("mean", 0.0) * si
         walk = noise.get("K", {}).get("mean", 0.0) * si
+        instability = walk**2 + 9 * FLICKER_ALLAN_FACTOR * flicker**2 / duration
+        mean_variance = float(np.asarray(component_weights(B=flicker, K=walk)) @ window)
         powers = (heat[:, axis, None] - calibration.reference) ** np.arange(calibration.degree + 1)
         priors.append(
             GyroPrior(
@@ -141,7 +152,8 @@ def gyro_priors(old: dict, heat, duration_s: float, si: float) -> tuple[GyroPrio
                 drift_shape=_drift_shape(
                     calibration.degree, calibration.reference, calibration.temperature_range
                 ),
-                instability=walk**2 + 9 * FLICKER_ALLAN_FACTOR * flicker**2 / duration_s,
+                instability=instability,
+                offset_variance=max(mean_variance - instability * duration / 3, 0.0),
             )
         )
     return tuple(priors)

@@ -222,6 +222,8 @@ def main() -> None:
         given.append(second)
         if (index + 1) % 10 == 0:
             print(f"... {index + 1} parks", flush=True)
+    if not learned:
+        return
     print("== the aging learned from the alignment (drift='auto', the default)")
     report(learned)
     print(f"== the aging given: {args.given:g} times the calibration's sd of c0 (drift=S)")

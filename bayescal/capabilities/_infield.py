@@ -258,6 +258,18 @@ def infield_update(
     InputError
         Motion in the alignment window (where), a missing temperature, a latitude out of
         range, a window too short, a calibration of other channels or units, a taxi.
+
+    Examples
+    --------
+    >>> import bayescal as bc
+    >>> update = bc.infield_update(
+    ...     "park.csv", "old.json", latitude=45.2, align=(0, 1200)
+    ... ).check()  # doctest: +SKIP
+    >>> update.projections["north"]["level"]["sd"]  # deg/h  # doctest: +SKIP
+    0.0037
+    >>> update.axes["gyro_z"]["informed_by_alignment"]  # doctest: +SKIP
+    False
+    >>> update.save("new.json")  # doctest: +SKIP
     """
     if taxi is not None or track_heading is not None:
         raise InputError(

@@ -465,6 +465,8 @@ def with_posterior(base: ThermalCalibration, fit: ThermalFit) -> ThermalCalibrat
         },
         "diagnostics": fit.diagnostics.as_dict(),
     }
+    if fit.coefficient_mixture_sd is not None:
+        bayesian["coefficient_mixture_sd"] = fit.coefficient_mixture_sd
     return replace(
         base,
         degree=fit.degree,

@@ -171,6 +171,7 @@ def test_one_signature_style():
         "ThermalCalibration.update",
         "discover",
         "fit_fleet",
+        "infield_update",
     }
 
 

@@ -298,7 +298,7 @@ def infield_update(
             f"the vehicle moves during the alignment window: at t = {first.start_s + moved[0]:.1f}"
             f" s {moved[1]}",
             source=recording.source,
-            fix="give a still window (--align T0:T1)",
+            fix="give a still window for the alignment (its start and stop, s)",
         )
     compensated = si * np.stack(
         [gyro[:, axis] - cal.bias(heat[:, axis])[0] for axis, cal in enumerate(old.values())], 1

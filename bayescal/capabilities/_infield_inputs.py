@@ -73,14 +73,14 @@ def read_alignment(recording: Recording, window, columns: dict, options: dict):
                 f"unit {channel.unit} is not {kind}",
                 source=recording.source,
                 column=channel.channel,
-                fix="pass --unit deg/s for the gyros (--accel-unit m/s^2 for the accelerometers)",
+                fix='pass unit="deg/s" for the gyros (accel_unit="m/s^2" for the accelerometers)',
             )
     units = {g.unit for g in gyros}
     if len(units) > 1 or len({c.values.size for c in (*gyros, *accels)}) > 1:
         raise InputError(
             "the gyros and accelerometers do not share one unit and sample grid",
             source=recording.source,
-            fix="give the gyros one unit (--unit) and the same time column",
+            fix="give the gyros one unit and the same time column",
         )
     if gyros[0].duration_s < window[1] - window[0] - 1.5 / gyros[0].rate_hz:
         raise InputError(
@@ -125,7 +125,8 @@ def old_calibrations(calibration, names, unit: str, heat_unit: str) -> dict:
             raise InputError(
                 f"the calibration of '{name}' is in {old.unit} per {old.temperature_unit}, the "
                 f"recording in {unit} per {heat_unit}",
-                fix="pass --unit to match, or give a calibration in the recording's units",
+                fix=f'pass unit="{old.unit}" to match, or give a calibration in the '
+                "recording's units",
             )
     return {name: found[name] for name in names}
 

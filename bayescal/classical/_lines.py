@@ -78,8 +78,14 @@ MAX_LINES = 24
 """The most lines a record is searched for."""
 MAX_ROUNDS = 8
 RESIDUE = 1.5
-"""A candidate within this many ordinates of a sinusoid found is what it leaves: two
-sinusoids closer than that are not told apart, and the line is broadened."""
+"""A candidate this near a sinusoid found (ordinates) is fitted as a sinusoid even where only
+a sum of ordinates is significant: a close neighbour, or what a broadened line leaves."""
+RESOLVED = 1.0
+"""Two sinusoids fitted closer than this (ordinates) are not told apart: a broadened line."""
+COMB = 2.0
+"""Three sinusoids or more each within this of the next (ordinates) are a broadened line."""
+CLUSTER = 4.0
+"""Sinusoids within this many ordinates of each other are refined jointly."""
 BROAD_SHARE = 0.2
 """A line whose power left after its sinusoid is taken out is at least this share of its
 power is broadened (module docstring)."""
@@ -390,14 +396,12 @@ def _frequency_columns(nu, coefficients, start: int, stop: int, offset: int) -> 
     return derivative(t + 1) - derivative(t)
 
 
-def _joint_covariance(spectrum, nu: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
-    """(3 L, 3 L): the covariance of every line's (sine, cosine) coefficients, then every
-    line's frequency (cycles per sample), for white increments of unit variance: the
-    weighted least-squares sandwich (J'WJ)^-1 J'W^2J (J'WJ)^-1 of the Jacobian J of the
-    fitted increments (a constant beside them; taken out) — the Cramér-Rao form of the
-    frequencies' errors, their neighbours' included."""
+def _jacobian_sums(spectrum, nu, coefficients, residual=None, fourth=True):
+    """J'WJ, J'W^2J (with ``fourth``) and J'W r over the record: J the fitted increments'
+    Jacobian (a constant, every line's coefficients, then every line's frequency), in
+    blocks."""
     size = 1 + 3 * nu.size
-    gram, fourth = np.zeros((size, size)), np.zeros((size, size))
+    gram, squares, cross = np.zeros((size, size)), np.zeros((size, size)), np.zeros(size)
     for start in range(0, spectrum.size, _CHUNK):
         stop = min(start + _CHUNK, spectrum.size)
         columns = np.concatenate(
@@ -409,7 +413,48 @@ def _joint_covariance(spectrum, nu: np.ndarray, coefficients: np.ndarray) -> np.
         )
         weighted = columns * spectrum.weight[start:stop, None]
         gram += weighted.T @ columns
-        fourth += weighted.T @ weighted
+        if fourth:
+            squares += weighted.T @ weighted
+        if residual is not None:
+            cross += weighted.T @ residual[start:stop]
+    return gram, squares, cross
+
+
+def _gauss_newton(spectrum, nu: np.ndarray, coefficients, fitted, steps: int = 4) -> np.ndarray:
+    """The frequencies of lines within :data:`CLUSTER` ordinates of each other refined
+    jointly, cluster by cluster (the record less the other lines): Gauss-Newton steps of the
+    weighted least squares of the increments, each line's coefficients refitted at every
+    step — which separates lines a little over an ordinate apart where one at a time does
+    not."""
+    order = np.argsort(nu)
+    gaps = np.diff(nu[order]) * spectrum.size
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], (gaps < CLUSTER).astype(np.int8), [0]))))
+    nu = nu.copy()
+    for start, stop in zip(edges[::2], edges[1::2], strict=True):
+        members = order[start : stop + 1]
+        data = spectrum.increments - fitted
+        for k in members:
+            data = data + spectrum.own(nu, coefficients, k)
+        group = nu[members]
+        for _ in range(steps):
+            local, local_fit, _ = _least_squares(data, spectrum.weight, group, spectrum.offset)
+            gram, _, cross = _jacobian_sums(spectrum, group, local, data - local_fit, False)
+            step = (np.linalg.pinv(gram) @ cross)[1 + 2 * group.size :]
+            step = np.clip(step, -0.25 / spectrum.size, 0.25 / spectrum.size)
+            group = group + step
+            if np.max(np.abs(step)) < 1e-7 / spectrum.size:
+                break
+        nu[members] = group
+    return nu
+
+
+def _joint_covariance(spectrum, nu: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
+    """(3 L, 3 L): the covariance of every line's (sine, cosine) coefficients, then every
+    line's frequency (cycles per sample), for white increments of unit variance: the
+    weighted least-squares sandwich (J'WJ)^-1 J'W^2J (J'WJ)^-1 of the Jacobian J of the
+    fitted increments (a constant beside them; taken out) — the Cramér-Rao form of the
+    frequencies' errors, their neighbours' included."""
+    gram, fourth, _ = _jacobian_sums(spectrum, nu, coefficients)
     inverse = np.linalg.pinv(gram)
     return (inverse @ fourth @ inverse)[1:, 1:]
 
@@ -512,9 +557,8 @@ class _Spectrum:
 
 def _search(spectrum: _Spectrum, max_lines: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
     """The lines found, round by round (module docstring): the sinusoids' frequencies
-    (cycles per sample) and the broadened lines' bands (ordinates [lo, hi]). A candidate
-    within :data:`RESIDUE` ordinates of a sinusoid found is what that sinusoid leaves: the
-    line is broadened."""
+    (cycles per sample) and the broadened lines' bands (ordinates [lo, hi]). Sinusoids packed
+    closer than the record resolves are a broadened line (:func:`_packed`)."""
     nu, bands = np.zeros(0), []
     coefficients, fitted = np.zeros(1), np.zeros(spectrum.size)
     for _ in range(MAX_ROUNDS):
@@ -526,17 +570,12 @@ def _search(spectrum: _Spectrum, max_lines: int) -> tuple[np.ndarray, list[tuple
         if not found:
             break
         usable = _usable(power.size, spectrum.highest, positions)
-        residue = np.zeros(nu.size, dtype=bool)
         starts = []
         for peak, single in found[: max_lines - nu.size - len(bands)]:
-            near = np.abs(nu * spectrum.size - peak) < RESIDUE
-            if near.any():
-                residue |= near
-            elif single:
+            if single or np.any(np.abs(nu * spectrum.size - peak) < RESIDUE):
                 starts.append(_interpolated(power, peak) / spectrum.size)
             else:  # power over several ordinates, none a sinusoid's alone
                 bands.append(_broad_band(spectrum, power, usable, peak))
-        nu, coefficients, fitted = _to_bands(spectrum, nu, coefficients, fitted, residue, bands)
         if not starts:
             continue
         nu = np.concatenate((nu, starts))
@@ -548,6 +587,10 @@ def _search(spectrum: _Spectrum, max_lines: int) -> tuple[np.ndarray, list[tuple
                 moved[k] = _refined(spectrum.increments - fitted + own, spectrum.weight, nu[k])
             nu = moved
             coefficients, fitted, _ = spectrum.fit(nu)
+        nu = _gauss_newton(spectrum, nu, coefficients, fitted)
+        coefficients, fitted, _ = spectrum.fit(nu)
+        packed = _packed(nu * spectrum.size)
+        nu, coefficients, fitted = _to_bands(spectrum, nu, coefficients, fitted, packed, bands)
     broad = _broadened(spectrum, nu, coefficients, fitted, bands)
     nu, _, _ = _to_bands(spectrum, nu, coefficients, fitted, broad, bands)
     bands = _merged(bands)
@@ -570,6 +613,23 @@ def _merged(bands: list[tuple[int, int]]) -> list[tuple[int, int]]:
         else:
             joined.append((lo, hi))
     return joined
+
+
+def _packed(positions: np.ndarray) -> np.ndarray:
+    """Sinusoids packed closer than the record resolves (ordinates ``positions``): two less
+    than :data:`RESOLVED` apart, or three or more each within :data:`COMB` of the next — a
+    broadened line that sinusoids were fitted to piece by piece."""
+    order = np.argsort(positions)
+    gaps = np.diff(positions[order])
+    packed = np.zeros(positions.size, dtype=bool)
+    for k in np.flatnonzero(gaps < RESOLVED):
+        packed[order[k]] = packed[order[k + 1]] = True
+    close = np.concatenate(([False], gaps <= COMB, [False]))
+    edges = np.flatnonzero(np.diff(close.astype(np.int8)))
+    for start, stop in zip(edges[::2], edges[1::2], strict=True):
+        if stop - start >= 2:  # two gaps or more: three sinusoids or more
+            packed[order[start : stop + 1]] = True
+    return packed
 
 
 def _to_bands(spectrum, nu, coefficients, fitted, broad, bands):

@@ -82,7 +82,7 @@ RESIDUE = 1.5
 a sum of ordinates is significant: a close neighbour, or what a broadened line leaves."""
 RESOLVED = 1.0
 """Two sinusoids fitted closer than this (ordinates) are not told apart: a broadened line."""
-COMB = 2.0
+COMB = 1.5
 """Three sinusoids or more each within this of the next (ordinates) are a broadened line."""
 CLUSTER = 4.0
 """Sinusoids within this many ordinates of each other are refined jointly."""

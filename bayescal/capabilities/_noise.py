@@ -326,12 +326,16 @@ def fit_noise(
     terms : str or tuple of str
         ``"auto"`` (the default): white noise and every candidate term the record holds
         decisive evidence for — bias instability, rate random walk, rate ramp, white angle
-        noise (quantization) and the output filter in one of its shapes (one-tap, decimation,
-        Butterworth, biquad) — chosen as :func:`~bayescal.inference.select_noise_terms` describes
-        and reported in :attr:`NoiseFit.selection`. Or the terms themselves: white,
-        bias_instability, rate_random_walk, quantization, rate_ramp, output_filter,
-        decimation_filter, butterworth_filter, biquad_filter (aliases such as ``rrw`` and
-        ``all`` as on the command line).
+        noise (quantization), a Gauss-Markov bias and the output filter in one of its shapes
+        (one-tap, decimation, Butterworth, biquad) — chosen as
+        :func:`~bayescal.inference.select_noise_terms` describes and reported in
+        :attr:`NoiseFit.selection`, and the spectral lines a periodogram test finds (taken out
+        of the record first: N is then the floor between them; :attr:`NoiseFit.lines`). A
+        term whose posterior the sampler cannot explore is refused, and the table says so. Or
+        the terms themselves: white, bias_instability, rate_random_walk, quantization,
+        rate_ramp, output_filter, decimation_filter, butterworth_filter, biquad_filter,
+        gauss_markov, spectral_lines (aliases such as ``rrw``, ``lines`` and ``all`` as on the
+        command line).
     sensor : str or SensorCard, optional
         A sensor card (``bayescal sensors``) whose datasheet figures become priors.
     seed : int

@@ -3,7 +3,8 @@
 The public names, loaded on first use (Scientific Python SPEC 1, lazy loading): ``import
 bayescal`` costs nothing, and a name pulls in only what it needs — the command line answers
 ``--help`` without importing JAX. The package is layered, each layer importing only those
-before it: recording -> classical -> models -> inference -> capabilities -> report -> cli.
+before it: recording -> classical -> models -> navigation -> inference -> capabilities -> report
+-> cli.
 """
 
 import importlib
@@ -48,6 +49,9 @@ _EXPORTS = {
     # models
     "NoiseModel": "models._noise_model",
     "FleetPopulation": "models._population",
+    # navigation
+    "simulate_park": "navigation._simulate",
+    "ParkSimulation": "navigation._simulate",
     # inference
     "Sampler": "inference._sampler",
     # capabilities
@@ -60,6 +64,9 @@ _EXPORTS = {
     "fit_thermal": "capabilities._thermal_fit",
     "ThermalCalibration": "capabilities._thermal",
     "load_thermal_calibration": "capabilities._thermal",
+    "save_thermal_calibrations": "capabilities._thermal",
+    "infield_update": "capabilities._infield",
+    "InFieldUpdate": "capabilities._infield",
     "discover": "capabilities._discovery",
     "Discovery": "capabilities._discovery",
     "FoundEffect": "capabilities._discovery",

@@ -334,13 +334,27 @@ JSON_VALUES = st.recursive(
 @st.composite
 def calibration_files(draw):
     """A calibration file with a field removed or replaced, a number of an array field
-    changed, dropped or added, or other JSON, or bytes."""
-    kind = draw(st.sampled_from(["replace", "remove", "other", "bytes", "nested", "element"]))
+    changed, dropped or added, a file of several channels whose map or entry is any JSON, or
+    other JSON, or bytes."""
+    kind = draw(
+        st.sampled_from(["replace", "remove", "other", "bytes", "nested", "element", "several"])
+    )
     if kind == "bytes":
         return draw(st.binary(max_size=64))
     if kind == "other":
         return json.dumps(draw(JSON_VALUES)).encode()
     document = json.loads(json.dumps(CALIBRATION))
+    if kind == "several":
+        entry = draw(st.sampled_from(["valid", "map", "entry"]))
+        channels = (
+            {"gyro_x": document}
+            if entry == "valid"
+            else draw(JSON_VALUES)
+            if entry == "map"
+            else {"gyro_x": draw(JSON_VALUES)}
+        )
+        several = {"schema": CALIBRATION["schema"], "schema_version": 1, "channels": channels}
+        return json.dumps(several).encode()
     field = draw(st.sampled_from(sorted(CALIBRATION)))
     if kind == "remove":
         del document[field]

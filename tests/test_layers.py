@@ -1,7 +1,7 @@
 """The package's layers: every import (module level or inside a function) goes one way,
-recording -> classical -> models -> inference -> capabilities -> report -> cli, and no module
-imports itself back through others. The command line loads nothing heavy to parse its
-arguments."""
+recording -> classical -> models -> navigation -> inference -> capabilities -> report -> cli,
+and no module imports itself back through others. The command line loads nothing heavy to
+parse its arguments."""
 
 import ast
 import json
@@ -12,7 +12,16 @@ from pathlib import Path
 import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "bayescal"
-LAYERS = ("recording", "classical", "models", "inference", "capabilities", "report", "cli")
+LAYERS = (
+    "recording",
+    "classical",
+    "models",
+    "navigation",
+    "inference",
+    "capabilities",
+    "report",
+    "cli",
+)
 FOUNDATION = ("bayescal._errors", "bayescal._output", "bayescal._x64", "bayescal")
 """Imported by every layer: the errors, the atomic writer, JAX's precision, the lazy
 public names."""

@@ -10,7 +10,10 @@ the temperature range the data covered, the noise model, the Earth rate taken of
 and the provenance of every step. A file of another schema version, with a field missing or
 malformed (checked field by field: finite numbers, sizes that match the degree, a symmetric
 positive semi-definite covariance), or made for another channel, unit or temperature unit, is
-refused (:func:`load_thermal_calibration`).
+refused (:func:`load_thermal_calibration`). A calibration of several channels (the three gyros
+of an in-field update, :func:`save_thermal_calibrations`) is one file of the same schema and
+version whose ``channels`` maps each channel's name to its fields;
+:func:`load_thermal_calibration` reads one channel of it (``channel=``).
 
 :meth:`ThermalCalibration.update` takes the calibration as the prior of the coefficients *plus
 a drift since then*: ``drift="auto"`` (default) learns its scale from the alignment data, a
@@ -43,7 +46,14 @@ from ..recording._inputs import (
     temperature_of,
 )
 from ..recording._recording import Channel
-from ._thermal_file import document_of, fields_of, read_document
+from ._thermal_file import (
+    SCHEMA,
+    SCHEMA_VERSION,
+    channel_document,
+    document_of,
+    fields_of,
+    read_document,
+)
 
 
 def _coefficient_units(unit: str, temperature_unit: str, degree: int) -> list[str]:
@@ -455,6 +465,8 @@ def with_posterior(base: ThermalCalibration, fit: ThermalFit) -> ThermalCalibrat
         },
         "diagnostics": fit.diagnostics.as_dict(),
     }
+    if fit.coefficient_mixture_sd is not None:
+        bayesian["coefficient_mixture_sd"] = fit.coefficient_mixture_sd
     return replace(
         base,
         degree=fit.degree,
@@ -502,7 +514,7 @@ def load_thermal_calibration(
         another channel, unit or temperature unit.
     """
     source = str(path)
-    document = read_document(path)
+    document = channel_document(read_document(path), channel, source)
     calibration = replace(ThermalCalibration.from_document(document, source), origin=source)
     if channel is not None and calibration.channel != channel:
         raise InputError(
@@ -526,3 +538,58 @@ def load_thermal_calibration(
             "header, e.g. temperature[degF]), or refit",
         )
     return calibration
+
+
+def save_thermal_calibrations(calibrations, path) -> Path:
+    """Write the calibrations of several channels as one file (atomically), which
+    :func:`load_thermal_calibration` reads channel by channel.
+
+    Parameters
+    ----------
+    calibrations : iterable of ThermalCalibration or mapping of name to ThermalCalibration
+        One calibration per channel, each channel once.
+    path : str or Path
+        The JSON file to write.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    InputError
+        No calibration, or a channel given twice.
+
+    Examples
+    --------
+    >>> import bayescal as bc
+    >>> x = bc.ThermalCalibration.from_document(
+    ...     {
+    ...         "schema": "bayescal.thermal_calibration", "schema_version": 1,
+    ...         "channel": "gyro_x", "unit": "deg/s", "temperature_unit": "degC",
+    ...         "reference_temperature": 30.0, "degree": 0, "coefficients": [1e-5],
+    ...         "covariance": [[1e-12]], "temperature_range": [20.0, 40.0],
+    ...         "noise": {"terms": ["white"]}, "provenance": [],
+    ...     }
+    ... )
+    >>> y = bc.ThermalCalibration.from_document({**x.to_document(), "channel": "gyro_y"})
+    >>> path = bc.save_thermal_calibrations([x, y], "imu.json")
+    >>> bc.load_thermal_calibration(path, channel="gyro_y").channel
+    'gyro_y'
+    """
+    values = list(calibrations.values()) if isinstance(calibrations, dict) else list(calibrations)
+    names = [calibration.channel for calibration in values]
+    if not values or len(set(names)) != len(names):
+        raise InputError(
+            f"save_thermal_calibrations needs one calibration per channel, got {names}",
+            fix="give each channel's calibration once",
+        )
+    channels = {}
+    for calibration in values:
+        document = calibration.to_document()
+        del document["schema"], document["schema_version"]
+        channels[calibration.channel] = document
+    path = Path(path)
+    write_json(path, {"schema": SCHEMA, "schema_version": SCHEMA_VERSION, "channels": channels})
+    return path

@@ -216,6 +216,34 @@ def read_document(path) -> dict:
         ) from None
 
 
+def channel_document(document, channel: str | None, source: str):
+    """The fields of one channel: the document itself, or, for a file of several channels, the
+    one named ``channel`` (the only one when there is one)."""
+    if not (
+        isinstance(document, dict) and document.get("schema") == SCHEMA and "channels" in document
+    ):
+        return document
+    channels = document["channels"]
+    if not isinstance(channels, dict) or not channels:
+        raise _field_error(source, "channels", "must map each channel's name to its calibration")
+    if channel is None and len(channels) == 1:
+        channel = next(iter(channels))
+    if channel not in channels:
+        held = ", ".join(map(str, channels))
+        raise InputError(
+            f"the file holds the calibrations of {held}"
+            + ("" if channel is None else f", not of '{channel}'"),
+            source=source,
+            fix="name one of its channels"
+            if channel is None
+            else f"use a calibration of '{channel}'",
+        )
+    entry = channels[channel]
+    if not isinstance(entry, dict):
+        raise _field_error(source, f"channels.{channel}", "must be an object")
+    return {"schema": SCHEMA, "schema_version": document.get("schema_version"), **entry}
+
+
 def document_of(calibration) -> dict:
     """The file's content of a :class:`~bayescal.ThermalCalibration` (the layout of schema
     version 1; arrays as NumPy arrays, written as lists)."""

@@ -1,4 +1,4 @@
-"""Layer 7, the command line: argument parsing and exit codes over the library, nothing else.
+"""Layer 8, the command line: argument parsing and exit codes over the library, nothing else.
 Each command is a module with ``add_parser`` (the arguments; no heavy import, so that
 ``bayescal --help`` answers at once) and ``run`` (which calls the library and renders its
 result).

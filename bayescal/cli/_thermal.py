@@ -1,4 +1,5 @@
-"""``bayescal thermal fit | update | compensate``: the thermal bias of a gyro."""
+"""``bayescal thermal fit | update | compensate | infield``: the thermal bias of a gyro, and its
+in-field update from a strapdown system's own alignment."""
 
 import math
 import sys
@@ -13,6 +14,7 @@ from ._arguments import (
     finite_float,
     grid_options,
     health_exit,
+    height,
     latitude,
     load,
     require_bayesian_run,
@@ -26,7 +28,9 @@ MAX_DEGREE = 4
 
 
 def add_parser(commands) -> None:
-    thermal = commands.add_parser("thermal", help="thermal bias of a gyro: fit, update, compensate")
+    thermal = commands.add_parser(
+        "thermal", help="thermal bias of a gyro: fit, update, compensate, update in the field"
+    )
     steps = thermal.add_subparsers(dest="step", required=True, parser_class=type(thermal))
 
     def recording(parser):
@@ -95,31 +99,70 @@ def add_parser(commands) -> None:
     compensate.add_argument("--calibration", required=True, metavar="PATH")
     compensate.add_argument("--out", required=True, metavar="CSV", help="compensated recording")
     compensate.set_defaults(run=run_compensate)
+    _add_infield(steps)
 
 
-def temperature_unit(recording, column: str) -> tuple[str, bool]:
-    """The unit of the temperature column (from its header or name; degC when neither says)
-    and whether the file declares it."""
-    from ..recording._units import parse_unit, unit_from_column_suffix
-
-    declared = recording.header_units.get(column) or unit_from_column_suffix(column)
-    if declared is None:
-        return "degC", False
-    parsed = parse_unit(declared)
-    if parsed.quantity != "temperature":
-        raise InputError(
-            f"the temperature column's unit '{declared}' is not a temperature unit",
-            source=recording.source,
-            column=column,
-            fix="write degC, degF or K in its header, e.g. temperature[degC]",
-        )
-    return parsed.name, True
+def _add_infield(steps) -> None:
+    infield = steps.add_parser(
+        "infield",
+        help="update every gyro's thermal calibration from a strapdown system's own alignment",
+        description="The in-field update of US 5,527,003 at rest: the recording's body rates, "
+        "specific forces and gyro temperatures during an extended alignment, mechanized and "
+        "filtered; the north-projected bias and the thermal slopes are updated, the east level "
+        "stays confounded with the heading error, the vertical gyro is not updated.",
+    )
+    add_recording_arguments(infield, channel="many", window=False, temperature=True)
+    infield.add_argument(
+        "--calibration",
+        required=True,
+        metavar="PATH",
+        help="the old thermal calibration of the three gyros (one file of several channels)",
+    )
+    infield.add_argument(
+        "--latitude", type=latitude, required=True, metavar="DEG", help="geodetic latitude"
+    )
+    infield.add_argument("--height", type=height, default=0.0, metavar="M")
+    infield.add_argument(
+        "--align",
+        required=True,
+        metavar="T0:T1",
+        help="the still alignment window, seconds from the first sample (at least 300 s)",
+    )
+    infield.add_argument("--taxi", metavar="T0:T1", help="the taxi (not yet supported)")
+    infield.add_argument(
+        "--track-heading", metavar="DEG", help="the taxiway's heading (not yet supported)"
+    )
+    infield.add_argument(
+        "--accel-unit", metavar="UNIT", help="unit of the accelerometers (default m/s^2)"
+    )
+    infield.add_argument(
+        "--accel-instability",
+        type=finite_float,
+        default=1e-5,
+        metavar="M/S2",
+        help="the accelerometers' bias instability, m/s^2 (default 1e-5: navigation grade)",
+    )
+    infield.add_argument(
+        "--drift",
+        default="auto",
+        metavar="S|auto",
+        help="how far each gyro's bias may have aged since the calibration, in the gyros' unit "
+        "(a datasheet's bias repeatability, say); auto (default) learns it from the "
+        "alignment, 0 assumes no aging",
+    )
+    infield.add_argument("--seed", type=seed, default=0)
+    infield.add_argument("--quiet", action="store_true")
+    infield.add_argument("--json", metavar="PATH", required=True, help="the result (JSON)")
+    infield.add_argument(
+        "--save", metavar="PATH", help="the updated calibrations of the three gyros (one file)"
+    )
+    infield.set_defaults(run=run_infield)
 
 
 def _channel(args):
     """The gyro channel with its temperature on its grid, the temperature column and its
     unit."""
-    from ..recording._columns import find_temperature_column
+    from ..recording._columns import find_temperature_column, temperature_unit
 
     if not args.channel:
         raise InputError("--channel is required", fix="name the gyro column, e.g. --channel gyro_z")
@@ -291,7 +334,7 @@ def run_update(args) -> int:
 def run_compensate(args) -> int:
     from .._output import write_csv
     from ..capabilities._thermal import load_thermal_calibration
-    from ..recording._columns import find_temperature_column
+    from ..recording._columns import find_temperature_column, temperature_unit
     from ..recording._recording import resolve_unit
 
     declare_outputs([args.file, args.calibration], {"--out": args.out})
@@ -349,3 +392,73 @@ def run_compensate(args) -> int:
         "its sd)"
     )
     return 0
+
+
+def _span(text: str, option: str) -> tuple[float, float]:
+    try:
+        start, stop = (float(part) for part in text.split(":"))
+    except ValueError:
+        start = stop = math.nan
+    if not (math.isfinite(start) and math.isfinite(stop) and stop > start):
+        raise InputError(f"{option} {text!r}", fix="write T0:T1 in seconds, T1 after T0")
+    return start, stop
+
+
+def _infield_columns(args) -> dict:
+    if not args.channels:
+        return {}
+    names = [part.strip() for part in args.channels.split(",")]
+    if len(names) != 6 or not all(names):
+        raise InputError(
+            f"--channels {args.channels!r}",
+            fix="name the three gyros then the three accelerometers, e.g. "
+            "gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z",
+        )
+    return {"gyro_columns": tuple(names[:3]), "accel_columns": tuple(names[3:])}
+
+
+def run_infield(args) -> int:
+    from .._output import write_json
+
+    declare_outputs([args.file, args.calibration], {"--json": args.json, "--save": args.save})
+    align = _span(args.align, "--align")
+    drift = _parse_drift(args.drift)
+    taxi = _span(args.taxi, "--taxi") if args.taxi else None
+    if args.accel_instability < 0:
+        raise InputError(f"--accel-instability {args.accel_instability:g} must not be negative")
+    if args.scale is not None or args.gaps != "error":
+        raise InputError(
+            "thermal infield takes the gyros in a rate unit and a gap-free window",
+            fix="leave out --scale and --gaps (pass --unit for the gyros' unit)",
+        )
+    recording = load(args)
+    # The analysis's modules load once the input is known to be good.
+    from ..capabilities._infield import infield_update
+    from ..report._infield import infield_text
+
+    result = infield_update(
+        recording,
+        args.calibration,
+        latitude=args.latitude,
+        align=align,
+        taxi=taxi,
+        track_heading=args.track_heading,
+        seed=args.seed,
+        drift=drift or 0.0,
+        temperature=args.temperature,
+        unit=args.unit,
+        accel_unit=args.accel_unit,
+        rate_hz=args.rate,
+        time_column=args.time_column,
+        time_unit=args.time_unit,
+        height=args.height,
+        accel_instability=args.accel_instability,
+        sampler=sampler(args),
+        **_infield_columns(args),
+    )
+    document = result.to_document()
+    write_json(args.json, document)
+    if args.save:
+        result.save(args.save)
+    print(infield_text(document))
+    return health_exit("thermal infield", result.checks["failures"])

@@ -3,7 +3,7 @@
 import re
 
 from .._errors import InputError
-from ._units import unit_from_column_suffix
+from ._units import parse_unit, unit_from_column_suffix
 
 _ACCEL_NAME = re.compile(r"^(?P<prefix>acc|accel|accelerometer|a)[_ \-]?(?P<axis>[xyz])$")
 _TEMPERATURE_NAMES = (
@@ -59,3 +59,20 @@ def default_channels(table) -> list[str]:
         for name in table.columns
         if name not in ("time", "t", "timestamp") and (is_gyro_name(name) or is_accel_name(name))
     ]
+
+
+def temperature_unit(recording, column: str) -> tuple[str, bool]:
+    """The unit of the temperature column (from its header or name; degC when neither says)
+    and whether the file declares it."""
+    declared = recording.header_units.get(column) or unit_from_column_suffix(column)
+    if declared is None:
+        return "degC", False
+    parsed = parse_unit(declared)
+    if parsed.quantity != "temperature":
+        raise InputError(
+            f"the temperature column's unit '{declared}' is not a temperature unit",
+            source=recording.source,
+            column=column,
+            fix="write degC, degF or K in its header, e.g. temperature[degC]",
+        )
+    return parsed.name, True

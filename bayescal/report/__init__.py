@@ -1,4 +1,4 @@
-"""Layer 6, reports: results rendered as the JSON documents of the command line, text, figures,
+"""Layer 7, reports: results rendered as the JSON documents of the command line, text, figures,
 the self-contained HTML page, and the files other tools read (Kalibr, MATLAB). Imports the
 layers below it, nothing above.
 

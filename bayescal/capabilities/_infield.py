@@ -1,0 +1,414 @@
+"""The in-field update of a strapdown system's gyro thermal calibration from its own alignment
+(claim 1 of US 5,527,003, steps a-j, at rest; ../shared/NAVIGATION.md).
+
+It composes the layers below: the recording's gyros, accelerometers and temperatures in the
+alignment window (checked still), the old calibration taken off the gyros, the mechanization
+and fine-alignment filter of :mod:`bayescal.navigation._alignment`, the posterior of the aging
+since the calibration (:mod:`bayescal.inference._infield`), and the patent's classical tilt
+rates block by block (:mod:`bayescal.navigation._tilt_rates`) beside it.
+
+What the alignment can tell (NAVIGATION.md): the north-projected bias and the north and east
+projections of the thermal slope; not the east bias level, which at rest is one quantity with
+the heading error (its interval stays as wide as the prior), nor the vertical gyro, which is
+reported "not informed" and keeps its old calibration. A gyro whose axis lies within 60 deg of
+the vertical counts as vertical.
+"""
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._errors import HealthCheckError, InputError
+from .._output import to_jsonable
+from ..classical._gravity import normal_gravity
+from ..inference._infield import sample_alignment
+from ..inference._sampler import Sampler, sampler_of
+from ..navigation._alignment import (
+    DRIFT_PRIOR_SCALE,
+    find_motion,
+    fine_alignment,
+)
+from ..navigation._alignment import heading_sensitivity as _heading_row
+from ..navigation._earth import check_latitude
+from ..navigation._error_model import TILT
+from ..navigation._frames import euler_from_dcm
+from ..navigation._simulate import ACCELEROMETERS, GYROS
+from ..recording._recording import Recording, load_recording
+from ..recording._units import parse_unit
+from ._infield_inputs import alignment_window, gyro_priors, old_calibrations, read_alignment
+from ._infield_summary import (
+    calibration_notes,
+    calibrations,
+    classical,
+    informed_axes,
+    innovation_check,
+    points,
+    projections,
+    summary,
+)
+from ._thermal import save_thermal_calibrations as _save
+
+ACCEL_INSTABILITY = 1e-5
+"""The accelerometers' bias instability assumed, m/s^2 (1 ug: navigation grade)."""
+TAXI_LATER = (
+    "the taxi's heading measurement (--taxi, --track-heading) is not yet supported (issue 36)"
+)
+
+
+@dataclass(frozen=True)
+class InFieldUpdate:
+    """The gyro thermal calibrations updated from an alignment at rest, with what the
+    alignment could and could not tell.
+
+    Made by :func:`infield_update`; :meth:`save` writes the calibrations as one file,
+    :meth:`to_document` the whole result.
+
+    Attributes
+    ----------
+    calibration : dict
+        Channel -> its :class:`~bayescal.ThermalCalibration`: updated for the gyros the
+        alignment informs, the old one (its provenance noting why) for the vertical gyro.
+    heading_error : dict
+        The heading error at the alignment's end, computed minus true: ``mean``, ``sd``,
+        ``q05``, ``q95`` in degrees. At rest it is the east bias level in disguise.
+    points : dict
+        Channel -> the (temperature, gyro bias) pairs of the fine alignment's smoother, one
+        per block: ``time_s``, ``temperature``, ``bias``, ``sd`` and the ``unit``.
+    classical : dict
+        The patent's tilt rates block by block: the north bias and the east bias less the
+        heading term per block, and each gyro's points (its vertical part taken as the old
+        calibration's).
+    checks : dict
+        ``passed``, ``failures``, the sampler's checks and the velocity innovations' check.
+    axes : dict
+        Channel -> whether the alignment informs it, and why.
+    projections : dict
+        The north, east and down projections of the gyro biases: ``level`` (mean over the
+        alignment), ``level_at_reference`` (at each gyro's T0: the polynomials' constant) and
+        ``slope`` (at the mean temperature), deg/h and deg/h/degC: posterior summary, prior
+        sd, and whether the alignment informs it.
+    drift : dict
+        The learned aging scale s, in the calibrations' unit.
+    alignment : dict
+        The window, the place, the coarse attitude and the computed attitude at the end
+        (deg), and the white-noise densities read from the record.
+    notes : tuple of str
+        What the run noticed (temperatures outside the calibrated range, ...).
+    posterior : object
+        The draws behind it (the drift scale and every state at the alignment's end).
+    """
+
+    calibration: dict
+    heading_error: dict
+    points: dict
+    classical: dict
+    checks: dict
+    axes: dict
+    projections: dict
+    drift: dict
+    alignment: dict
+    notes: tuple[str, ...] = ()
+    posterior: object = field(default=None, compare=False, repr=False)
+
+    @property
+    def passed(self) -> bool:
+        """Whether every check passed."""
+        return bool(self.checks["passed"])
+
+    def check(self) -> "InFieldUpdate":
+        """Raise :class:`~bayescal.HealthCheckError` naming the failed checks, if any.
+
+        Returns
+        -------
+        InFieldUpdate
+            This result, unchanged, when every check passed.
+
+        Raises
+        ------
+        HealthCheckError
+            A check failed; the message names each.
+        """
+        if not self.passed:
+            raise HealthCheckError("in-field update: " + "; ".join(self.checks["failures"]))
+        return self
+
+    def save(self, path):
+        """Write the calibrations (every gyro's, updated or not) as one file.
+
+        Parameters
+        ----------
+        path : str or Path
+            The JSON file to write; :func:`~bayescal.load_thermal_calibration` reads each
+            channel of it.
+
+        Returns
+        -------
+        Path
+            ``path``.
+        """
+        return _save(self.calibration, path)
+
+    def to_document(self) -> dict:
+        """The result as JSON-ready content (what ``bayescal thermal infield --json`` writes).
+
+        Returns
+        -------
+        dict
+            ``heading_error``, ``axes`` (per channel: ``informed_by_alignment`` and the
+            updated coefficients), ``projections``, ``drift``, ``points``, ``classical``,
+            ``checks``, ``alignment`` and ``notes``.
+        """
+        axes = {}
+        for name, entry in self.axes.items():
+            new = self.calibration[name]
+            axes[name] = {
+                **entry,
+                "coefficients": new.coefficients,
+                "coefficient_units": new.coefficient_units,
+                "sd": np.sqrt(np.diag(new.covariance)),
+                "covariance": new.covariance,
+                "reference_temperature": new.reference,
+            }
+        return to_jsonable(
+            {
+                "schema": "bayescal.infield_update",
+                "schema_version": 1,
+                "heading_error": self.heading_error,
+                "axes": axes,
+                "projections": self.projections,
+                "drift": self.drift,
+                "points": self.points,
+                "classical": self.classical,
+                "checks": self.checks,
+                "alignment": self.alignment,
+                "notes": list(self.notes),
+            }
+        )
+
+
+def infield_update(
+    recording,
+    calibration,
+    *,
+    latitude: float,
+    align: tuple[float, float],
+    taxi: tuple[float, float] | None = None,
+    track_heading=None,
+    seed: int = 0,
+    drift: float | str = "auto",
+    gyro_columns=GYROS,
+    accel_columns=ACCELEROMETERS,
+    temperature=None,
+    unit: str | None = None,
+    accel_unit: str | None = None,
+    rate_hz: float | None = None,
+    time_column: str | None = None,
+    time_unit: str | None = None,
+    height: float = 0.0,
+    accel_instability: float = ACCEL_INSTABILITY,
+    sampler: Sampler = Sampler(),
+) -> InFieldUpdate:
+    """Update the gyros' thermal calibrations from the system's own extended alignment.
+
+    Parameters
+    ----------
+    recording : Recording or str or Path
+        The strapdown system's record (:func:`~bayescal.load_recording`): time, body rates,
+        specific forces and gyro temperatures.
+    calibration : str or Path, mapping or list of ThermalCalibration
+        The old calibration of each gyro (one file of several channels, see
+        :func:`~bayescal.save_thermal_calibrations`).
+    latitude : float
+        Geodetic latitude, degrees (within +-85).
+    align : (float, float)
+        The still alignment window, seconds from the first sample (at least 300 s).
+    taxi, track_heading : optional
+        The taxi and its known heading (not yet supported: the east level then stays at its
+        prior).
+    seed : int
+        Seed of the sampler: the same inputs and seed give the same result.
+    drift : float or "auto"
+        How far each gyro's bias may have aged since the calibration (the drift scale s of
+        :meth:`~bayescal.ThermalCalibration.update`, in the calibrations' unit, e.g. a
+        datasheet's bias repeatability): ``"auto"`` learns it from the alignment, which
+        informs it in only a few directions (see the guide), 0 assumes no aging.
+    gyro_columns, accel_columns : tuple of str
+        The gyro (x, y, z) and accelerometer columns.
+    temperature : str or tuple of str, optional
+        The temperature column, or one per gyro (default: found by name).
+    unit, accel_unit : str, optional
+        The gyros' unit (deg/s, rad/s ...) and the accelerometers' (m/s^2, g); default from
+        the header.
+    rate_hz, time_column, time_unit
+        The time base, as for every recording (:meth:`~bayescal.Recording.channel`).
+    height : float
+        Height above the ellipsoid, m.
+    accel_instability : float
+        The accelerometers' bias instability, m/s^2.
+    sampler : Sampler
+        The sampler's settings (:class:`~bayescal.Sampler`), used when the aging scale is
+        learned.
+
+    Returns
+    -------
+    InFieldUpdate
+        The updated calibrations, heading error, points, classical points and checks.
+
+    Raises
+    ------
+    InputError
+        Motion in the alignment window (where), a missing temperature, a latitude out of
+        range, a window too short, a calibration of other channels or units, a taxi.
+
+    Examples
+    --------
+    >>> import bayescal as bc
+    >>> update = bc.infield_update(
+    ...     "park.csv", "old.json", latitude=45.2, align=(0, 1200)
+    ... ).check()  # doctest: +SKIP
+    >>> update.projections["north"]["level"]["sd"]  # deg/h  # doctest: +SKIP
+    0.0037
+    >>> update.axes["gyro_z"]["informed_by_alignment"]  # doctest: +SKIP
+    False
+    >>> update.save("new.json")  # doctest: +SKIP
+    """
+    if taxi is not None or track_heading is not None:
+        raise InputError(
+            TAXI_LATER,
+            fix="leave them out: the east bias level then stays at its prior, as the result says",
+        )
+    latitude = check_latitude(latitude)
+    window = alignment_window(align)
+    if drift != "auto" and not (isinstance(drift, (int, float)) and 0 <= drift < math.inf):
+        raise InputError(
+            f"drift {drift!r}", fix="give auto, 0 (no aging) or a positive scale in the gyros' unit"
+        )
+    if not isinstance(recording, Recording):
+        recording = load_recording(recording)
+    columns = {"gyro": gyro_columns, "accel": accel_columns, "temperature": temperature}
+    columns |= {"unit": unit, "accel_unit": accel_unit}
+    options = {"rate_hz": rate_hz, "time_column": time_column, "time_unit": time_unit}
+    gyro, accel, heat, first, heat_unit, notes = read_alignment(recording, window, columns, options)
+    old = old_calibrations(calibration, gyro_columns, first.unit, heat_unit)
+    si = parse_unit(first.unit).to_si
+    moved = find_motion(gyro * si, accel, first.rate_hz)
+    if moved is not None:
+        raise InputError(
+            f"the vehicle moves during the alignment window: at t = {first.start_s + moved[0]:.1f}"
+            f" s {moved[1]}",
+            source=recording.source,
+            fix="give a still window (--align T0:T1)",
+        )
+    compensated = si * np.stack(
+        [gyro[:, axis] - cal.bias(heat[:, axis])[0] for axis, cal in enumerate(old.values())], 1
+    )
+    priors = gyro_priors(old, heat, first.rate_hz, si)
+    sd_c0 = float(np.exp(np.mean([0.5 * math.log(p.covariance[0, 0]) for p in priors])))
+    location = math.log(DRIFT_PRIOR_SCALE * sd_c0)
+    alignment = fine_alignment(
+        compensated,
+        accel,
+        first.rate_hz,
+        priors,
+        latitude=math.radians(latitude),
+        height=height,
+        reference_drift=math.exp(location),
+        accel_instability=accel_instability,
+    )
+    posterior = sample_alignment(
+        alignment,
+        location=location,
+        seed=seed,
+        drift=drift if drift == "auto" else drift * si,
+        sampler=sampler_of(sampler),
+    )
+    context = {
+        "si": si,
+        "unit": first.unit,
+        "source": recording.source,
+        "seed": seed,
+        "latitude": latitude,
+        "height": height,
+        "window": window,
+        "notes": notes,
+        "drift": drift,
+    }
+    return _result(alignment, posterior, old, heat, priors, context)
+
+
+def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InFieldUpdate:
+    """Every part of the :class:`InFieldUpdate` from the alignment and its posterior."""
+    si, unit = context["si"], context["unit"]
+    attitude = alignment.trajectory.attitude[-1]
+    heading = np.degrees(posterior.states[:, TILT] @ _heading_row(attitude))
+    if posterior.diagnostics is None:
+        sampler = {
+            "passed": True,
+            "failures": [],
+            "method": "the aging scale was given: one Gaussian posterior, nothing sampled",
+        }
+    else:
+        sampler = posterior.diagnostics.as_dict()
+    drift = {**summary(posterior.drift / si, unit), "learned": posterior.diagnostics is not None}
+    drift["scale"] = drift.pop("mean")
+    axes = informed_axes(attitude, list(old))
+    new = calibrations(alignment, posterior, old, heat, axes, sampler, drift, context)
+    latitude = math.radians(context["latitude"])
+    gravity = normal_gravity(context["latitude"], context["height"])
+    innovations = innovation_check(posterior.filtered)
+    failures = list(sampler["failures"])
+    if not innovations["passed"]:
+        failures.append(
+            f"the velocity innovations (sum of NIS {innovations['sum_nis']:.4g}) exceed the "
+            f"99.9 % chi^2 limit {innovations['upper_limit']:.4g}: the vehicle swayed or moved, "
+            "or the noise is larger than the model holds"
+        )
+    coarse, final = (
+        dict(
+            zip(
+                ("roll", "pitch", "heading"),
+                np.degrees(np.asarray(euler_from_dcm(c))).tolist(),
+                strict=True,
+            )
+        )
+        for c in (alignment.coarse_attitude, attitude)
+    )
+    notes = calibration_notes(old, heat, axes, posterior.drift, context)
+    return InFieldUpdate(
+        calibration=new,
+        heading_error={
+            **summary(heading, "deg"),
+            "definition": "computed minus true heading at the alignment's end",
+        },
+        points=points(alignment, old, heat, posterior, si),
+        classical=classical(alignment, old, heat, attitude, latitude, gravity, si),
+        checks={
+            "passed": not failures,
+            "failures": failures,
+            "sampler": sampler,
+            "innovations": innovations,
+        },
+        axes=axes,
+        projections=projections(alignment, priors, old, heat, posterior, attitude),
+        drift=drift,
+        alignment={
+            "start_s": context["window"][0],
+            "stop_s": context["window"][1],
+            "latitude_deg": context["latitude"],
+            "height_m": context["height"],
+            "coarse_attitude_deg": coarse,
+            "final_attitude_deg": final,
+            "gyro_white_noise": {
+                "value": (alignment.noise["gyro"] / math.radians(1) * 60).tolist(),
+                "unit": "deg/sqrt(h)",
+            },
+            "accel_white_noise": {
+                "value": alignment.noise["accel"].tolist(),
+                "unit": "m/s^2/sqrt(Hz)",
+            },
+            "filter_step_s": float(alignment.times[1] - alignment.times[0]),
+        },
+        notes=tuple(notes),
+        posterior=posterior,
+    )

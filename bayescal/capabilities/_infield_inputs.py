@@ -1,0 +1,162 @@
+"""The inputs of an in-field update (:mod:`._infield`), checked: the alignment window, the
+gyros, accelerometers and temperatures on one grid, the old calibration of each gyro, and the
+priors the fine alignment takes from them."""
+
+import math
+from collections.abc import Mapping
+from os import PathLike
+
+import numpy as np
+
+from .._errors import InputError
+from ..classical._noise import FLICKER_FLOOR
+from ..models._components import Components
+from ..models._thermal import _drift_shape
+from ..models.effects._parameter import Context
+from ..navigation._alignment import MIN_ALIGNMENT_S, GyroPrior
+from ..recording._columns import find_temperature_column, temperature_unit
+from ..recording._recording import Recording
+from ..recording._units import parse_unit
+from ._thermal import ThermalCalibration, load_thermal_calibration
+
+
+def alignment_window(align) -> tuple[float, float]:
+    try:
+        start, stop = (float(value) for value in align)
+    except (TypeError, ValueError):
+        start = stop = math.nan
+    if not (math.isfinite(start) and math.isfinite(stop) and stop > start >= 0):
+        raise InputError(
+            f"align {align!r}",
+            fix="give the alignment window as (t0, t1), seconds from the first sample, t1 > t0",
+        )
+    if stop - start < MIN_ALIGNMENT_S:
+        raise InputError(
+            f"the alignment window {start:g}:{stop:g} lasts {stop - start:g} s, shorter than "
+            f"the {MIN_ALIGNMENT_S:g} s the fine alignment can use",
+            fix="give a longer still window (the patent's extended alignment: 10-20 minutes)",
+        )
+    return start, stop
+
+
+def _temperature_columns(recording: Recording, temperature) -> list[str]:
+    if temperature is None or (isinstance(temperature, str) and "," not in temperature):
+        return [find_temperature_column(recording, temperature)] * 3
+    names = temperature.split(",") if isinstance(temperature, str) else list(temperature)
+    names = [name.strip() for name in names]
+    if len(names) != 3:
+        raise InputError(
+            f"temperature {temperature!r}", fix="give one column, or one per gyro (x, y, z)"
+        )
+    return [find_temperature_column(recording, name) for name in names]
+
+
+def read_alignment(recording: Recording, window, columns: dict, options: dict):
+    """The gyros (their unit), accelerometers (m/s^2) and per-gyro temperatures in the window,
+    on one grid; the gyro unit, the temperature unit and the channels' notes."""
+    temperatures = _temperature_columns(recording, columns["temperature"])
+    grid = {**options, "start": window[0], "stop": window[1], "at_rest": False}
+    gyros = [
+        recording.channel(name, unit=columns["unit"], temperature=temperatures[axis], **grid)
+        for axis, name in enumerate(columns["gyro"])
+    ]
+    accels = [
+        recording.channel(name, unit=columns["accel_unit"], **grid) for name in columns["accel"]
+    ]
+    kinds = [
+        *(("angular_rate", "an angular rate"),) * 3,
+        *(("acceleration", "an acceleration"),) * 3,
+    ]
+    for channel, (quantity, kind) in zip((*gyros, *accels), kinds, strict=True):
+        if parse_unit(channel.unit).quantity != quantity:
+            raise InputError(
+                f"unit {channel.unit} is not {kind}",
+                source=recording.source,
+                column=channel.channel,
+                fix="pass --unit deg/s for the gyros (--accel-unit m/s^2 for the accelerometers)",
+            )
+    units = {g.unit for g in gyros}
+    if len(units) > 1 or len({c.values.size for c in (*gyros, *accels)}) > 1:
+        raise InputError(
+            "the gyros and accelerometers do not share one unit and sample grid",
+            source=recording.source,
+            fix="give the gyros one unit (--unit) and the same time column",
+        )
+    if gyros[0].duration_s < window[1] - window[0] - 1.5 / gyros[0].rate_hz:
+        raise InputError(
+            f"the recording ends at {gyros[0].stop_s:.6g} s, inside the alignment window "
+            f"{window[0]:g}:{window[1]:g}",
+            source=recording.source,
+            fix="give a window inside the recording",
+        )
+    heat_units = {temperature_unit(recording, name)[0] for name in temperatures}
+    if len(heat_units) > 1:
+        raise InputError("the temperature columns use different units", source=recording.source)
+    gyro = np.stack([g.values for g in gyros], axis=1)
+    accel = np.stack([a.values * parse_unit(a.unit).to_si for a in accels], axis=1)
+    heat = np.stack([g.temperature for g in gyros], axis=1)
+    notes = tuple(dict.fromkeys(note for c in (*gyros, *accels) for note in c.notes))
+    return gyro, accel, heat, gyros[0], heat_units.pop(), notes
+
+
+def old_calibrations(calibration, names, unit: str, heat_unit: str) -> dict:
+    if isinstance(calibration, (str, PathLike)):
+        return {
+            name: load_thermal_calibration(
+                calibration, channel=name, unit=unit, temperature_unit=heat_unit
+            )
+            for name in names
+        }
+    given = list(calibration.values() if isinstance(calibration, Mapping) else calibration)
+    if not all(isinstance(item, ThermalCalibration) for item in given):
+        raise InputError(
+            "calibration: give a calibration file, or ThermalCalibration objects (a mapping or "
+            "a list)"
+        )
+    found = {item.channel: item for item in given}
+    for name in names:
+        if name not in found:
+            raise InputError(
+                f"the calibration holds {', '.join(found) or 'no channel'}, not '{name}'",
+                fix="give one thermal calibration per gyro, named as its column",
+            )
+        old = found[name]
+        if old.unit != unit or old.temperature_unit != heat_unit:
+            raise InputError(
+                f"the calibration of '{name}' is in {old.unit} per {old.temperature_unit}, the "
+                f"recording in {unit} per {heat_unit}",
+                fix="pass --unit to match, or give a calibration in the recording's units",
+            )
+    return {name: found[name] for name in names}
+
+
+def gyro_priors(old: dict, heat, rate_hz: float, si: float) -> tuple[GyroPrior, ...]:
+    """Each gyro's prior for the fine alignment, in SI units: its temperature powers, the
+    calibration's covariance and drift shape, and its bias instability as an offset and a
+    random walk (:mod:`bayescal.navigation._alignment`): the walk's Allan variance matches the
+    flicker floor at a third of the alignment, the offset makes up the exact variance of the
+    flicker's mean over it (:meth:`bayescal.models._components.Components.block_covariances`)."""
+    count = heat.shape[0]
+    duration = count / rate_hz
+    components = Components.of(("bias_instability", "rate_random_walk"), Context(rate_hz, duration))
+    window = components.block_covariances(np.array([0]), np.array([count]), rate_hz)[:, 0, 0]
+    priors = []
+    for axis, calibration in enumerate(old.values()):
+        noise = calibration.noise
+        flicker = noise.get("B", {}).get("mean", 0.0) * si
+        walk = noise.get("K", {}).get("mean", 0.0) * si
+        instability = walk**2 + 9 * FLICKER_FLOOR**2 * flicker**2 / duration
+        mean_variance = float(np.asarray(components.weights({"B": flicker, "K": walk})) @ window)
+        powers = (heat[:, axis, None] - calibration.reference) ** np.arange(calibration.degree + 1)
+        priors.append(
+            GyroPrior(
+                powers=powers,
+                covariance=np.asarray(calibration.covariance) * si**2,
+                drift_shape=_drift_shape(
+                    calibration.degree, calibration.reference, calibration.temperature_range
+                ),
+                instability=instability,
+                offset_variance=max(mean_variance - instability * duration / 3, 0.0),
+            )
+        )
+    return tuple(priors)

@@ -1,0 +1,268 @@
+"""The parts of an in-field update's result (:mod:`._infield`): the projected biases, each gyro's
+points, the patent's classical points, the updated calibrations, which gyros the alignment
+informs, and the velocity innovations' check — each read off the fine alignment
+(:mod:`bayescal.navigation._alignment`) and its posterior (:mod:`bayescal.inference._infield`).
+"""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from .._output import to_jsonable
+from ..navigation._alignment import mixture_moments
+from ..navigation._tilt_rates import blocks, tilt_rate_points
+from ..recording._units import parse_unit
+from ._thermal import provenance_step
+
+INFORMED_HORIZONTAL = 0.5
+"""A gyro axis whose horizontal part (sin of its angle from the vertical) is below this is the
+vertical gyro: the alignment does not inform it."""
+DEG_PER_HOUR = math.radians(1) / 3600
+"""rad/s per deg/h."""
+
+
+def summary(draws, unit: str) -> dict:
+    draws = np.ravel(draws)
+    return {
+        "mean": float(draws.mean()),
+        "sd": float(draws.std(ddof=1)),
+        "q05": float(np.quantile(draws, 0.05)),
+        "q95": float(np.quantile(draws, 0.95)),
+        "unit": unit,
+    }
+
+
+def _slope_weights(degree: int, temperature: float, reference: float) -> np.ndarray:
+    """d/dT of (T - T0)^j at ``temperature``, j = 0..degree."""
+    power = np.arange(degree + 1)
+    return power * (temperature - reference) ** np.maximum(power - 1, 0)
+
+
+def projections(alignment, priors, old, heat, posterior, attitude) -> dict:
+    """The north, east and down projections of the gyro biases, old calibration plus change:
+    their mean over the alignment ("level", what the tilt rates measure), their value at each
+    gyro's reference temperature ("level_at_reference", the polynomials' constant: east, the
+    one the heading error hides) and their slope at each gyro's mean temperature; posterior
+    summary and prior sd (given s, averaged over its posterior), deg/h and deg/h/degC."""
+    layout, model = alignment.layout, alignment.model
+    scale = np.asarray(model.scale)
+    drifts = np.quantile(posterior.drift, np.linspace(0.01, 0.99, 50))
+    priors_s = [np.asarray(model.prior(s)) for s in drifts]
+    informed = {
+        "north": {"level": True, "level_at_reference": True, "slope": True},
+        "east": {"level": False, "level_at_reference": False, "slope": True},
+        "down": {"level": False, "level_at_reference": False, "slope": False},
+    }
+    found = {}
+    for row, direction in enumerate(informed):
+        for kind in informed[direction]:
+            vector, old_part = np.zeros(len(layout.names)), 0.0
+            for axis, (prior, calibration) in enumerate(zip(priors, old.values(), strict=True)):
+                degree, reference = calibration.degree, calibration.reference
+                if kind == "level":
+                    weights = prior.powers.mean(axis=0)
+                elif kind == "slope":
+                    weights = _slope_weights(degree, float(heat[:, axis].mean()), reference)
+                else:
+                    weights = np.eye(degree + 1)[0]
+                vector[layout.coefficients[axis]] = attitude[row, axis] * weights
+                old_value = float(weights @ calibration.coefficients)
+                old_part += attitude[row, axis] * old_value * parse_unit(calibration.unit).to_si
+            scaled = vector * scale
+            variance = np.mean([scaled @ prior_s @ scaled for prior_s in priors_s])
+            entry = summary(
+                (posterior.states @ vector + old_part) / DEG_PER_HOUR,
+                "deg/h/degC" if kind == "slope" else "deg/h",
+            )
+            entry["prior_sd"] = math.sqrt(variance) / DEG_PER_HOUR
+            entry["informed"] = informed[direction][kind]
+            found.setdefault(direction, {})[kind] = entry
+    return found
+
+
+def points(alignment, old, heat, posterior, si: float) -> dict:
+    """Each gyro's bias at each block's middle from the smoother: the old calibration plus the
+    change of its coefficients and its instability, under the posterior mixture over s."""
+    layout, scale = alignment.layout, np.asarray(alignment.model.scale)
+    means, covariances = (np.asarray(x) for x in alignment.model.smooth(posterior.filtered))
+    block = layout.all_coefficients
+    draws = posterior.states[:, block] / scale[block]
+    steps = [int(index[index.size // 2]) for index in blocks(alignment.times)]
+    found = {}
+    for axis, (name, calibration) in enumerate(old.items()):
+        samples = [min(k * alignment.step_samples, heat.shape[0] - 1) for k in steps]
+        temperature = heat[samples, axis]
+        vectors = np.zeros((len(steps), len(layout.names)))
+        powers = np.arange(calibration.degree + 1)
+        vectors[:, layout.coefficients[axis]] = (
+            temperature[:, None] - calibration.reference
+        ) ** powers
+        if layout.walks[axis] is not None:
+            vectors[:, layout.walks[axis]] = 1.0
+        mean, sd = mixture_moments(means[steps], covariances[steps], vectors * scale, block, draws)
+        found[name] = {
+            "time_s": alignment.times[steps],
+            "temperature": temperature,
+            "bias": calibration.bias(temperature)[0] + mean / si,
+            "sd": sd / si,
+            "unit": calibration.unit,
+        }
+    return found
+
+
+def classical(alignment, old, heat, attitude, latitude, gravity: float, si: float) -> dict:
+    """The patent's tilt rates block by block (:mod:`bayescal.navigation._tilt_rates`), as
+    north and east points and as each gyro's points (its vertical part from the old
+    calibration)."""
+    rows = tilt_rate_points(
+        alignment.times, alignment.trajectory.velocity[:, :2], latitude, gravity
+    )
+    axes = {}
+    for axis, (name, calibration) in enumerate(old.items()):
+        points = []
+        for row in rows:
+            k = int(np.argmin(np.abs(alignment.times - row["time_s"])))
+            temperature = float(heat[min(k * alignment.step_samples, heat.shape[0] - 1), axis])
+            change = attitude[0, axis] * row["north"] + attitude[1, axis] * row["east_less_heading"]
+            sd = math.hypot(attitude[0, axis] * row["north_sd"], attitude[1, axis] * row["east_sd"])
+            points.append(
+                {
+                    "time_s": row["time_s"],
+                    "temperature": temperature,
+                    "bias": float(calibration.bias(temperature)[0]) + change / si,
+                    "sd": sd / si,
+                }
+            )
+        axes[name] = {"points": points, "unit": calibration.unit}
+    blocks_deg_h = [
+        {
+            key: value / DEG_PER_HOUR if key not in ("time_s",) else value
+            for key, value in row.items()
+        }
+        for row in rows
+    ]
+    return {
+        "method": "tilt rates from the curvature of the velocity error, block by block "
+        "(quadratic least squares, residuals taken as independent); the east points include "
+        "the heading error's Earth-rate equivalent, the vertical part is the old calibration's",
+        "blocks": blocks_deg_h,
+        "block_unit": "deg/h",
+        "axes": axes,
+    }
+
+
+def updated(calibration, draws, si: float, heat, step: dict, sampler: dict, drift: dict):
+    """``calibration`` with its coefficients' posterior from the alignment."""
+    coefficients = calibration.coefficients + draws / si
+    low, high = calibration.temperature_range
+    return replace(
+        calibration,
+        coefficients=coefficients.mean(axis=0),
+        covariance=np.cov(coefficients.T).reshape(calibration.degree + 1, -1),
+        temperature_range=(min(low, float(heat.min())), max(high, float(heat.max()))),
+        provenance=(*calibration.provenance, step),
+        bayesian=to_jsonable(
+            {
+                "coefficient_q05": np.quantile(coefficients, 0.05, axis=0),
+                "coefficient_q95": np.quantile(coefficients, 0.95, axis=0),
+                "degree_scores": {},
+                "diagnostics": sampler,
+            }
+        ),
+        classical=None,
+        offsets=None,
+        drift=drift,
+        posterior=None,
+        origin=None,
+    )
+
+
+def informed_axes(attitude, names) -> dict:
+    """Per gyro (``names`` in x, y, z order), whether the alignment informs it: its axis's
+    horizontal part at C_b^n ``attitude`` against INFORMED_HORIZONTAL, and why."""
+    axes = {}
+    for axis, name in enumerate(names):
+        horizontal = math.hypot(attitude[0, axis], attitude[1, axis])
+        tilt = math.degrees(math.asin(min(1.0, horizontal)))
+        informed = horizontal >= INFORMED_HORIZONTAL
+        why = (
+            f"{tilt:.0f} deg from the vertical: its bias projects on north and east, so the "
+            "north projection and the thermal slopes are informed; the east level is one "
+            "quantity with the heading error (kept at its prior until a taxi or a heading "
+            "reference)"
+            if informed
+            else f"{tilt:.0f} deg from the vertical: the alignment sees a vertical gyro's bias "
+            "only through the heading's slow drift, which the east bias hides; not updated"
+        )
+        axes[name] = {"informed_by_alignment": informed, "updated": informed, "why": why}
+    return axes
+
+
+def innovation_check(filtered) -> dict:
+    """The velocity innovations against the chi^2 their model gives them: larger ones mean
+    motion or noise the model does not hold."""
+    from scipy import stats
+
+    total = float(np.sum(filtered.normalized_innovation))
+    dof = int(np.sum(filtered.observed))
+    limit = float(stats.chi2.ppf(0.999, dof))
+    return {"sum_nis": total, "dof": dof, "upper_limit": limit, "passed": total <= limit}
+
+
+def calibrations(alignment, posterior, old, heat, axes, sampler, drift, context) -> dict:
+    """Each gyro's calibration after the alignment: updated where it informs the gyro, kept
+    (its provenance saying why) where it does not."""
+    new = {}
+    for axis, (name, calibration) in enumerate(old.items()):
+        step = provenance_step(
+            "infield",
+            source=context["source"],
+            channel=name,
+            n_samples=heat.shape[0],
+            seed=context["seed"],
+            extra={
+                "prior": calibration.origin or "a calibration in memory",
+                "latitude_deg": context["latitude"],
+                "align": list(context["window"]),
+                "drift": context["drift"],
+                "updated": axes[name]["updated"],
+                "why": axes[name]["why"],
+            },
+        )
+        if axes[name]["updated"]:
+            draws = posterior.states[:, alignment.layout.coefficients[axis]]
+            new[name] = updated(
+                calibration, draws, context["si"], heat[:, axis], step, sampler, drift
+            )
+        else:
+            new[name] = replace(
+                calibration, provenance=(*calibration.provenance, step), origin=None
+            )
+    return new
+
+
+def calibration_notes(old, heat, axes, drift, context) -> list[str]:
+    """Where the old polynomials are extrapolated, and what a kept calibration leaves out (the
+    aging the alignment shows; ``axes`` gains the kept and aged sds at T0)."""
+    notes = list(context["notes"])
+    unit = context["unit"]
+    aging = math.sqrt(float(np.mean(drift**2))) / context["si"]
+    for axis, (name, calibration) in enumerate(old.items()):
+        outside = calibration.outside_range(heat[:, axis])
+        if outside.any():
+            notes.append(
+                f"{name}: {100 * outside.mean():.3g} % of the alignment lies outside the "
+                f"calibrated range {calibration.temperature_range}: the old polynomial is "
+                "extrapolated there"
+            )
+        if not axes[name]["updated"]:
+            kept = math.sqrt(calibration.covariance[0, 0])
+            axes[name]["kept_sd_at_reference"] = kept
+            axes[name]["aged_sd_at_reference"] = math.hypot(kept, aging)
+            notes.append(
+                f"{name} is kept as it was: its sd at T0, {kept:.3g} {unit}, leaves out the "
+                f"aging the alignment shows (s = {aging:.3g} {unit}, rms): its bias may be off "
+                f"by about {math.hypot(kept, aging):.3g} {unit}"
+            )
+    return notes

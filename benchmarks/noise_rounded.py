@@ -48,7 +48,9 @@ def record(levels: int, shape: str, lines: bool, seed: int, samples: int):
             "line_amplitude": tuple(sd * rng.uniform(0.3, 2.0, 3)),
         }
     model = bc.NoiseModel(RATE, 0.0123, lsb=LSB, N=n, **slow, **FILTERS[shape], **extra)
-    return model.simulate(samples, seed=seed), n
+    # Each record its own noise: a seed shared across levels and shapes would repeat one
+    # realisation (scaled) in every record, and their N errors with it.
+    return model.simulate(samples, seed=int(rng.integers(2**31))), n
 
 
 def main() -> int:

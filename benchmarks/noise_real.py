@@ -1,5 +1,6 @@
 """The default ``noise`` on real recordings: N beside the Allan curve's reading, the terms the
-record chose, whether the model fits, and what discovery names.
+record chose, the spectral lines it holds (how many; the three strongest, frequency and
+amplitude in the channel's unit), whether the model fits, and what discovery names.
 
     python benchmarks/noise_real.py [--samples 262144] [--no-discover] [--skip ROWS]
 
@@ -98,6 +99,21 @@ def records(samples: int):
     )
 
 
+def lines_column(fit) -> str:
+    """The lines found: how many, and the three strongest (frequency, amplitude; broadened,
+    aliased)."""
+    if fit.lines is None or not fit.lines.lines:
+        return "none"
+    found = sorted(fit.lines.lines, key=lambda line: -line.amplitude["mean"])
+    shown = []
+    for line in found[:3]:
+        kind = " broadened" if line.broadened else ""
+        kind += " aliased" if line.aliased else ""
+        shown.append(f"{line.frequency_hz['mean']:.5g} Hz {line.amplitude['mean']:.2g}{kind}")
+    more = f", +{len(found) - 3}" if len(found) > 3 else ""
+    return f"{len(found)}: " + ", ".join(shown) + more
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=2**18)
@@ -107,10 +123,10 @@ def main() -> int:
     )
     args = parser.parse_args()
     print(
-        "| recording | channel | N (noise, 90 %) | N (Allan reading) | terms chosen | fit | "
-        "discovery names | time |"
+        "| recording | channel | N (noise, 90 %) | N (Allan reading) | terms chosen | lines | "
+        "fit | discovery names | time |"
     )
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|")
     for index, (label, name, values, rate, unit) in enumerate(records(args.samples)):
         if index < args.skip:
             continue
@@ -120,12 +136,16 @@ def main() -> int:
                 raise values
             fit = bc.fit_noise(values, rate, unit=unit, channel=name, seed=0)
         except bc.BayescalError as error:
-            print(f"| {label} | {name} | refused: {error} | | | | | |")
+            print(f"| {label} | {name} | refused: {error} | | | | | | |")
             continue
         n = fit.summary["N"]
         reading = fit.classical.slope_readings["N"]
         shown = f"{reading.value:.4g}" if reading.kind == "reading" else f"<= {reading.ci_high:.4g}"
-        terms = ", ".join(term for term in fit.terms if term != "white") or "white only"
+        terms = (
+            ", ".join(term for term in fit.terms if term not in ("white", "spectral_lines"))
+            or "white only"
+        )
+        shown_lines = lines_column(fit)
         if fit.lsb > 0:
             terms += f"; LSB {fit.lsb:.3g}"
         verdict = "fits" if fit.fits else "MISFIT: " + "; ".join(fit.misfits)
@@ -141,7 +161,8 @@ def main() -> int:
         elapsed = time.perf_counter() - started
         print(
             f"| {label} | {name} | {n['mean']:.4g} [{n['q05']:.4g}, {n['q95']:.4g}] "
-            f"{n['unit']} | {shown} | {terms} | {verdict} | {named} | {elapsed:.0f} s |"
+            f"{n['unit']} | {shown} | {terms} | {shown_lines} | {verdict} | {named} | "
+            f"{elapsed:.0f} s |"
         )
         sys.stdout.flush()
     return 0

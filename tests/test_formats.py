@@ -488,7 +488,7 @@ def test_placeholder_first_row_of_zeros_is_left_out(run_cli, tmp_path, plain):
     )
     expected, _ = _result(run_cli, plain["csv"], tmp_path)
     found, stdout = _result(run_cli, path, tmp_path)
-    assert "data row 1 holds 0 in every column" in stdout and "left out" in stdout
+    assert "data row 1 holds 0 in every sensor column" in stdout and "left out" in stdout
     assert found["classical"] == expected["classical"]
     # Row numbers in messages still count the file's rows.
     broken = gyro.copy()

@@ -43,3 +43,30 @@ def test_stored_draws_have_the_target_variances():
         ratios.append(np.var(draws, axis=0) / np.diag(COVARIANCE))
     pooled = float(np.mean(ratios))
     assert abs(pooled - 1.0) < 0.03, (pooled, np.mean(ratios, axis=0))
+
+
+def _ridge(theta):
+    """A thin curved ridge (b = 5 a^2, 0.01 wide): differential evolution cannot explore it."""
+    a, b = theta[:, 0], theta[:, 1]
+    return -0.5 * a**2 - 0.5 * ((b - 5 * a**2) / 0.01) ** 2
+
+
+def test_a_run_that_cannot_explore_is_restarted_then_stops_early():
+    """Stuck (acceptance below 0.1), a run is restarted from its unstranded walkers twice;
+    still stuck, it stops long before the step limit, and its failure says so. Measured:
+    acceptance 0.007-0.009, 2440 steps of the last run, of 20,000 allowed."""
+    sampler, converged = sample_ensemble(
+        _ridge, np.zeros(2), 0.01 * np.eye(2), np.random.default_rng(0), 32, 20_000
+    )
+    diagnostics, _ = diagnose(sampler, ("a", "b"), converged, True)
+    assert not converged and diagnostics.restarts == 2
+    assert diagnostics.n_steps < 5000
+    assert any("after 2 restart(s)" in failure for failure in diagnostics.failures)
+
+
+def test_a_healthy_run_is_never_restarted():
+    sampler, converged = sample_ensemble(
+        gaussian_log_density, np.zeros(4), COVARIANCE, np.random.default_rng(1), 32, 40_000
+    )
+    diagnostics, _ = diagnose(sampler, tuple("abcd"), converged, True)
+    assert converged and diagnostics.passed and diagnostics.restarts == 0

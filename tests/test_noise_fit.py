@@ -2,6 +2,8 @@
 sensor grades, a small seeded coverage study (the full one is benchmarks/noise_coverage.py),
 reproducibility and the health checks."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -212,3 +214,40 @@ def test_real_adis16405_gyro_against_its_published_allan_variance(shared_data):
     assert abs(result.parameters["N"].mean / readings["N"].value - 1) < 0.05
     assert abs(result.parameters["B"].mean / readings["B"].value - 1) < 0.25
     assert 0.1 < result.parameters["F"].mean < 0.3  # lag-1 autocorrelation of the output 0.17
+
+
+def test_a_term_the_sampler_cannot_explore_is_refused_and_said_so():
+    """A posterior that failed its sampler checks: the search refuses the kept term whose
+    parameters mixed slowest (not white noise), and its row says why; the rows of the model
+    without it stand (noise_posterior then samples that model)."""
+    from types import SimpleNamespace
+
+    from bayescal.inference._selection import TermSelection, TermTrial, refused_term
+
+    selection = TermSelection(
+        terms=("white", "biquad_filter", "gauss_markov"),
+        trials=(
+            TermTrial("biquad_filter", 495.0, True, "kept"),
+            TermTrial("gauss_markov", 30.0, True, "kept"),
+            TermTrial("bias_instability", -2.0, False, "left out"),
+        ),
+        log_evidence=0.0,
+        estimates={},
+        context=None,
+    )
+    diagnostics = SimpleNamespace(
+        passed=False,
+        failures=("acceptance fraction 0.05 outside (0.1, 0.8) after 2 restart(s)",),
+        autocorr_time={"N": 40.0, "filter_pole_k1": 900.0, "gm_tau": 300.0},
+    )
+    refused = refused_term(SimpleNamespace(diagnostics=diagnostics), selection)
+    assert refused.term == "biquad_filter" and "acceptance fraction 0.05" in refused.reason
+    without = dataclasses.replace(
+        selection, terms=("white", "gauss_markov"), trials=selection.trials[1:]
+    )
+    rows = {row["term"]: row for row in without.with_refused({refused.term: refused}).table}
+    assert not rows["biquad_filter"]["kept"]
+    assert rows["biquad_filter"]["reason"].startswith("refused: the evidence kept it (log BF 495")
+    assert rows["gauss_markov"]["kept"]
+    passed = SimpleNamespace(diagnostics=SimpleNamespace(passed=True))
+    assert refused_term(passed, selection) is None

@@ -25,6 +25,8 @@ TERMS = {
     "biquad_filter": dict(
         N=0.01, **OutputFilter(shape="biquad", poles=(-0.6, 0.3), zeros=(0.7, 0.5)).values
     ),
+    # Lines of random phase: their Allan variance is DESIGN.md's, at the samples' amplitude.
+    "spectral_lines": dict(N=0.01, line_frequency=(3.7, 21.0), line_amplitude=(0.02, 0.05)),
 }
 
 

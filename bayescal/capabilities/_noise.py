@@ -11,10 +11,12 @@ import numpy as np
 from .._errors import HealthCheckError, InputError
 from ..classical._noise import ClassicalNoise, classical_noise
 from ..inference._checks import noise_model_checker
+from ..inference._lines_posterior import SpectralLinesFit, lines_posterior
 from ..inference._noise_posterior import NoisePosterior, sample_noise
 from ..inference._priors import card_prior, default_prior
 from ..inference._sampler import Sampler, sampler_of
-from ..inference._selection import TermSelection, select_noise_terms
+from ..inference._selection import MAX_REFUSED, TermSelection, refused_term, select_noise_terms
+from ..models._noise_model import NoiseModel
 from ..models._noise_problem import NoiseProblem, noise_summaries
 from ..models._terms import (
     AUTO,
@@ -22,9 +24,14 @@ from ..models._terms import (
     DEFAULT_TERMS,
     READINGS,
     check_terms,
+    excluded_bands,
+    find_in_record,
+    left_in,
     parameter_unit,
     parse_terms,
+    without_found,
 )
+from ..models.effects.spectral_lines import SpectralLines
 from ..recording._inputs import channel_input
 from ..recording._levels import discrete_step
 from ..recording._sensor_cards import SensorCard, find_card
@@ -68,6 +75,11 @@ class NoiseFit:
     """The recording it comes from."""
     notes: tuple[str, ...] = ()
     """What was inferred or noticed (units assumed, a sensor card without the term ...)."""
+    lines: SpectralLinesFit | None = None
+    """The record's spectral lines, each with its frequency, amplitude (or power and width)
+    and intervals, when the model holds the spectral-lines term (``terms="auto"`` always
+    looks for them); the noise parameters are then those of the floor between them (the
+    record less the lines is what the noise model was fitted to and checked against)."""
 
     @property
     def terms(self) -> tuple[str, ...]:
@@ -196,6 +208,23 @@ class NoisePosteriorFit:
     checks: tuple[dict, ...]
     """The posterior-predictive checks of the MAP against the record
     (:func:`~bayescal.inference._checks.noise_model_checker`)."""
+    lines: SpectralLinesFit | None = None
+    """The record's spectral lines with their intervals, when looked for."""
+
+
+def _with_what_is_left(checker: Callable, found: dict) -> Callable:
+    """``checker`` of models that hold what the terms found in the record leave in it (a
+    broadened line, which the record less the sinusoids still carries)."""
+    extra = left_in(found)
+    if not extra:
+        return checker
+
+    def check(model: NoiseModel) -> list[dict]:
+        return checker(
+            NoiseModel(model.rate_hz, model.bias, lsb=model.lsb, **model.values, **extra)
+        )
+
+    return check
 
 
 def noise_posterior(
@@ -217,26 +246,58 @@ def noise_posterior(
     give; ``allan``: the Allan deviation of ``values`` at octave taus when already computed."""
     lsb = discrete_step(values)
     family = ("white", *CANDIDATE_TERMS) if terms == AUTO else terms
-    spectral, level = noise_summaries(values, rate_hz, family, level_values)
-    checker = noise_model_checker(spectral, values, unit, allan)
-    selection = None
-    if terms == AUTO:
-
-        def misfit(model) -> str:
-            return "; ".join(check["misfit"] for check in checker(model) if not check["passed"])
-
-        selection = select_noise_terms(spectral, level, prior_of, lsb=lsb, misfit=misfit)
-        terms = selection.terms
-    problem = NoiseProblem(spectral, level, prior_of(terms), lsb=np.asarray(lsb))
-    fit = sample_noise(
-        problem,
-        terms=terms,
-        seed=seed,
-        n_walkers=sampler.n_walkers,
-        max_steps=sampler.max_steps,
-        progress=sampler.progress,
+    # Terms found in the record (spectral lines) are taken out before the noise is fitted:
+    # the noise model, its checks and N are of what they leave.
+    found = find_in_record(family, values, rate_hz)
+    if any(finding.found for finding in found.values()):
+        values = without_found(found, values)
+        if level_values is not None and np.shape(level_values) == np.shape(values):
+            level_values = without_found(found, level_values)
+        allan = None
+    spectral, level = noise_summaries(
+        values, rate_hz, family, level_values, exclude=excluded_bands(found)
     )
-    return NoisePosteriorFit(fit, selection, lsb, tuple(checker(fit.model_at_map())))
+    checker = _with_what_is_left(noise_model_checker(spectral, values, unit, allan), found)
+    selection, refused, chosen = None, {}, terms
+
+    def misfit(model) -> str:
+        return "; ".join(check["misfit"] for check in checker(model) if not check["passed"])
+
+    while True:
+        if terms == AUTO:
+            # A term whose posterior the sampler could not explore is refused: the search
+            # runs again without it.
+            candidates = tuple(t for t in CANDIDATE_TERMS if t not in refused)
+            selection = select_noise_terms(
+                spectral,
+                level,
+                prior_of,
+                lsb=lsb,
+                misfit=misfit,
+                found=found,
+                candidates=candidates,
+            )
+            chosen = selection.terms
+        problem = NoiseProblem(spectral, level, prior_of(chosen), lsb=np.asarray(lsb))
+        fit = sample_noise(
+            problem,
+            terms=chosen,
+            seed=seed,
+            n_walkers=sampler.n_walkers,
+            max_steps=sampler.max_steps,
+            progress=sampler.progress,
+        )
+        culprit = refused_term(fit, selection) if selection is not None else None
+        if culprit is None or len(refused) == MAX_REFUSED:
+            break
+        refused[culprit.term] = culprit
+    if refused:
+        selection = selection.with_refused(refused)
+    terms = chosen
+    lines = None
+    if SpectralLines.name in found and SpectralLines.name in terms:
+        lines = lines_posterior(found[SpectralLines.name], fit, unit, seed=seed)
+    return NoisePosteriorFit(fit, selection, lsb, tuple(checker(fit.model_at_map())), lines)
 
 
 def fit_noise(
@@ -265,12 +326,16 @@ def fit_noise(
     terms : str or tuple of str
         ``"auto"`` (the default): white noise and every candidate term the record holds
         decisive evidence for — bias instability, rate random walk, rate ramp, white angle
-        noise (quantization) and the output filter in one of its shapes (one-tap, decimation,
-        Butterworth, biquad) — chosen as :func:`~bayescal.inference.select_noise_terms` describes
-        and reported in :attr:`NoiseFit.selection`. Or the terms themselves: white,
-        bias_instability, rate_random_walk, quantization, rate_ramp, output_filter,
-        decimation_filter, butterworth_filter, biquad_filter (aliases such as ``rrw`` and
-        ``all`` as on the command line).
+        noise (quantization), a Gauss-Markov bias and the output filter in one of its shapes
+        (one-tap, decimation, Butterworth, biquad) — chosen as
+        :func:`~bayescal.inference.select_noise_terms` describes and reported in
+        :attr:`NoiseFit.selection`, and the spectral lines a periodogram test finds (taken out
+        of the record first: N is then the floor between them; :attr:`NoiseFit.lines`). A
+        term whose posterior the sampler cannot explore is refused, and the table says so. Or
+        the terms themselves: white, bias_instability, rate_random_walk, quantization,
+        rate_ramp, output_filter, decimation_filter, butterworth_filter, biquad_filter,
+        gauss_markov, spectral_lines (aliases such as ``rrw``, ``lines`` and ``all`` as on the
+        command line).
     sensor : str or SensorCard, optional
         A sensor card (``bayescal sensors``) whose datasheet figures become priors.
     seed : int
@@ -348,4 +413,5 @@ def fit_noise(
         lsb=posterior.lsb,
         source=data.source,
         notes=(*data.notes, *prior_notes),
+        lines=posterior.lines,
     )

@@ -150,6 +150,21 @@ def column_names(text: str) -> list[str] | dict[str, list[str]]:
     return {variable.strip(): names} if variable else names
 
 
+def channel_units(text: str) -> dict[str, str]:
+    """``--units``: each channel's unit, ``gyro_x=deg/s,acc_x=g``."""
+    units = {}
+    for part in text.split(","):
+        name, equals, unit = (piece.strip() for piece in part.partition("="))
+        if not (equals and name and unit):
+            raise argparse.ArgumentTypeError(
+                f"'{part.strip()}' is not CHANNEL=UNIT (e.g. gyro_x=deg/s,acc_x=g)"
+            )
+        if name in units:
+            raise argparse.ArgumentTypeError(f"'{name}' is given two units")
+        units[name] = unit
+    return units
+
+
 def three_columns(text: str) -> tuple[str, str, str]:
     names = tuple(part.strip() for part in text.split(","))
     if len(names) != 3 or not all(names):
@@ -327,18 +342,20 @@ def load(args, path=None):
 
 
 def unit_and_scale(args, name: str | None) -> tuple[str | None, float | None]:
-    """The unit and scale factor of channel ``name``: ``--unit`` and ``--scale`` as given,
-    or, for ``--scale SENSOR``, the resolution of that sensor card's gyro or accelerometer
-    (chosen by ``--unit``, else by the channel's name) in ``--unit`` or in its own unit."""
+    """The unit and scale factor of channel ``name``: its ``--units`` entry (``report``), else
+    ``--unit``, and ``--scale`` as given, or, for ``--scale SENSOR``, the resolution of that
+    sensor card's gyro or accelerometer (chosen by the unit, else by the channel's name) in
+    that unit or in its own."""
     given = getattr(args, "scale", None)
+    unit = (getattr(args, "units", None) or {}).get(name) or args.unit
     if not isinstance(given, str):
-        return args.unit, given
+        return unit, given
     from ..recording._columns import is_accel_name, is_gyro_name
     from ..recording._sensor_cards import find_card
     from ..recording._units import parse_unit
 
     card = find_card(given)
-    quantity = parse_unit(args.unit).quantity if args.unit else None
+    quantity = parse_unit(unit).quantity if unit else None
     if quantity is None and name is not None:
         if is_gyro_name(name) and not is_accel_name(name):
             quantity = "angular_rate"
@@ -357,9 +374,9 @@ def unit_and_scale(args, name: str | None) -> tuple[str | None, float | None]:
             fix="pass the factor itself, e.g. --scale 1/131",
         )
     resolution = parse_unit(entry["unit"].replace("ug", "µg"))
-    if not args.unit:
+    if not unit:
         return resolution.name, float(entry["value"])
-    target = parse_unit(args.unit)
+    target = parse_unit(unit)
     return target.name, float(entry["value"]) * resolution.to_si / target.to_si
 
 

@@ -3,8 +3,10 @@ simulated one."""
 
 from pathlib import Path
 
+from .._errors import InputError
 from ._arguments import (
     add_recording_arguments,
+    channel_units,
     confidence,
     declare_outputs,
     grid_options,
@@ -35,6 +37,13 @@ def add_parser(commands) -> None:
         "with the JSON and the ArviZ netCDF behind it.",
     )
     add_recording_arguments(report, channel="many")
+    report.add_argument(
+        "--units",
+        type=channel_units,
+        metavar="CHANNEL=UNIT,...",
+        help="each channel's unit, e.g. gyro_x=deg/s,acc_x=g (over --unit and the header's); "
+        "a channel not named takes --unit, else its header's",
+    )
     report.add_argument(
         "--out", default="report", metavar="DIR", help="output folder (default: report)"
     )
@@ -103,6 +112,16 @@ def run(args) -> int:
         else default_channels(recording)
     )
     start, stop, described = window(args, recording)
+    unknown = [name for name in args.units or {} if name not in channels]
+    if unknown:
+        raise InputError(
+            f"--units names {', '.join(unknown)}, not among the channels reported "
+            f"({', '.join(channels)})",
+            fix="name the channels of --channels (or those found by name), e.g. "
+            f"{channels[0]}=deg/s"
+            if channels
+            else "name a channel of the recording",
+        )
     for name in dict.fromkeys(channels):
         options = grid_options(args, name)
         require_bayesian_run(recording.channel(name, start=start, stop=stop, **options))

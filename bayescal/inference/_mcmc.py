@@ -8,6 +8,13 @@ AUTOCORR_MULTIPLE autocorrelation times by the estimates at two successive check
 (Vehtari et al. 2021 for R-hat and ESS; emcee's guidance for the rest): that criterion, bulk
 ESS >= MIN_ESS for every parameter, R-hat <= MAX_RHAT across RHAT_GROUPS groups of walkers,
 mean acceptance within ACCEPTANCE_RANGE, and a converged MAP.
+
+A run that is stuck — its acceptance below the range, or walkers stranded far below the
+others' log density (a start from a Laplace approximation that does not hold: a ridge, a
+second mode) — is restarted before a failure is declared, at most MAX_RESTARTS times: the
+walkers start again from the mean and covariance of the unstranded walkers' second half,
+with the steps that are left. A run still below the acceptance range after its last restart
+stops there (running it on to the step limit would not make it explore).
 """
 
 import math
@@ -28,6 +35,13 @@ ACCEPTANCE_RANGE = (0.1, 0.8)
 AUTOCORR_MULTIPLE = 50
 RHAT_GROUPS = 4
 MAX_STORED_DRAWS = 2000
+MAX_RESTARTS = 2
+"""Restarts of a run that is stuck (:func:`sample_ensemble`) before a failure is declared."""
+RESTART_AFTER = (1000, 0.1)
+"""A run is judged stuck no sooner than this many steps, or this share of the most steps."""
+STRAGGLER_LOG_DENSITY = 20.0
+"""A walker whose log density stays this far (plus the ensemble's own spread) below the
+median is stuck away from the posterior."""
 
 
 class Diagnostics(eqx.Module):
@@ -45,6 +59,8 @@ class Diagnostics(eqx.Module):
     acceptance_fraction: float
     min_walker_acceptance: float
     map_converged: bool
+    restarts: int = 0
+    """Times the run was restarted, stuck, before these checks (:func:`sample_ensemble`)."""
 
     def as_dict(self) -> dict:
         return {
@@ -100,14 +116,7 @@ def sample_ensemble(
     # anchor walker instead of a unit vector (fixed on emcee's main branch, PR #531, not yet
     # released). A fifth of snooker moves made every posterior's sd 2-3 % too small, and a
     # hierarchical population's intervals 7 % too narrow (tests/test_mcmc.py measures it).
-    sampler = emcee.EnsembleSampler(
-        n_walkers, dimension, log_posterior_batch, vectorize=True, moves=emcee.moves.DEMove()
-    )
-    # emcee wraps the log density to print a traceback of any exception it raises before
-    # passing it on: an interruption (Ctrl-C, the command line's SIGTERM) is to end the run
-    # quietly. With no extra arguments the wrapper adds nothing else, so it is left out.
-    sampler.log_prob_fn = log_posterior_batch
-    sampler.random_state = np.random.RandomState(rng.integers(2**31)).get_state()
+    sampler = _ensemble(log_posterior_batch, n_walkers, dimension, rng)
     spread = np.linalg.cholesky(covariance + 1e-12 * np.eye(dimension))
     state = start + rng.standard_normal((n_walkers, dimension)) @ spread.T
     bar = None
@@ -118,8 +127,10 @@ def sample_ensemble(
             total=max_steps, desc="posterior (emcee)", unit="step", leave=False, file=sys.stderr
         )
     longer_before, converged, chunk = False, False, 250
-    while sampler.iteration < max_steps:
-        steps = min(chunk, max_steps - sampler.iteration)
+    restarts, used = 0, 0
+    judge_after = max(RESTART_AFTER[0], int(RESTART_AFTER[1] * max_steps))
+    while used + sampler.iteration < max_steps:
+        steps = min(chunk, max_steps - used - sampler.iteration)
         state = sampler.run_mcmc(state, steps)
         if bar is not None:
             bar.update(steps)
@@ -132,9 +143,59 @@ def sample_ensemble(
             break
         longer_before = longer
         chunk = max(chunk, int(sampler.iteration // 4))
+        if sampler.iteration >= judge_after and _stuck(sampler):
+            if restarts == MAX_RESTARTS:
+                break  # still stuck after the last restart: it would not explore
+            restarts += 1
+            used += sampler.iteration
+            state = _restart(sampler, rng)
+            sampler = _ensemble(log_posterior_batch, n_walkers, dimension, rng)
+            longer_before, chunk = False, 250
     if bar is not None:
         bar.close()
+    sampler.restarts = restarts  # read by diagnose()
     return sampler, converged
+
+
+def _ensemble(log_posterior_batch, n_walkers: int, dimension: int, rng):
+    """emcee's ensemble with differential-evolution moves, seeded from ``rng``."""
+    sampler = emcee.EnsembleSampler(
+        n_walkers, dimension, log_posterior_batch, vectorize=True, moves=emcee.moves.DEMove()
+    )
+    # emcee wraps the log density to print a traceback of any exception it raises before
+    # passing it on: an interruption (Ctrl-C, the command line's SIGTERM) is to end the run
+    # quietly. With no extra arguments the wrapper adds nothing else, so it is left out.
+    sampler.log_prob_fn = log_posterior_batch
+    sampler.random_state = np.random.RandomState(rng.integers(2**31)).get_state()
+    return sampler
+
+
+def _stranded(sampler) -> np.ndarray:
+    """Walkers whose log density over the second half of the run stays far below the
+    median's (by :data:`STRAGGLER_LOG_DENSITY` plus the spread a posterior's own walkers
+    have, sqrt(d / 2))."""
+    half = sampler.iteration // 2
+    recent = np.mean(sampler.get_log_prob(discard=half), axis=0)
+    spread = math.sqrt(sampler.ndim / 2)
+    return recent < np.median(recent) - STRAGGLER_LOG_DENSITY - 5 * spread
+
+
+def _stuck(sampler) -> bool:
+    """Whether a run is stuck: its acceptance below the range, or walkers stranded."""
+    return bool(
+        np.mean(sampler.acceptance_fraction) < ACCEPTANCE_RANGE[0] or _stranded(sampler).any()
+    )
+
+
+def _restart(sampler, rng) -> np.ndarray:
+    """A fresh start for a stuck run: from the normal of the mean and covariance of the
+    unstranded walkers' positions over the run's second half."""
+    chain = sampler.get_chain(discard=sampler.iteration // 2)  # (steps, walkers, dim)
+    kept = chain[:, ~_stranded(sampler)].reshape(-1, sampler.ndim)
+    mean = kept.mean(axis=0)
+    covariance = np.cov(kept, rowvar=False).reshape(sampler.ndim, sampler.ndim)
+    spread = np.linalg.cholesky(covariance + 1e-12 * np.eye(sampler.ndim))
+    return mean + rng.standard_normal((sampler.nwalkers, sampler.ndim)) @ spread.T
 
 
 def diagnose(sampler, names, converged: bool, map_converged: bool):
@@ -165,8 +226,12 @@ def diagnose(sampler, names, converged: bool, map_converged: bool):
             failures.append(
                 f"R-hat of {name} across walker groups is {rhat[name]:.3f} (> {MAX_RHAT})"
             )
+    restarts = getattr(sampler, "restarts", 0)
     if not ACCEPTANCE_RANGE[0] <= float(np.mean(acceptance)) <= ACCEPTANCE_RANGE[1]:
-        failures.append(f"acceptance fraction {np.mean(acceptance):.2f} outside {ACCEPTANCE_RANGE}")
+        after = f" after {restarts} restart(s)" if restarts else ""
+        failures.append(
+            f"acceptance fraction {np.mean(acceptance):.2f} outside {ACCEPTANCE_RANGE}{after}"
+        )
     if not map_converged:
         failures.append("the MAP optimisation did not converge")
     diagnostics = Diagnostics(
@@ -183,6 +248,7 @@ def diagnose(sampler, names, converged: bool, map_converged: bool):
         acceptance_fraction=float(np.mean(acceptance)),
         min_walker_acceptance=float(np.min(acceptance)),
         map_converged=map_converged,
+        restarts=restarts,
     )
     return diagnostics, by_walker[:, kept.astype(int)]
 

@@ -50,6 +50,7 @@ from ..models._terms import (
     ALL_TERMS,
     CANDIDATE_TERMS,
     FILTER_SHAPE_OF_TERM,
+    FOUND_TERMS,
     PARAMETERS,
     PARAMETERS_OF_TERM,
 )
@@ -60,6 +61,8 @@ from ._optimize import Mode
 
 DECISIVE_LOG_BAYES_FACTOR = math.log(100.0)
 """The evidence a term must add to be kept: decisive on Jeffreys' scale."""
+MAX_REFUSED = 2
+"""The most terms refused, one after another, for a posterior the sampler cannot explore."""
 
 
 @dataclass(frozen=True)
@@ -105,6 +108,23 @@ class TermSelection:
     def table(self) -> list[dict]:
         """One row per candidate: term, log Bayes factor, kept, reason."""
         return [dataclasses.asdict(trial) for trial in self.trials]
+
+    def with_refused(self, refused: dict[str, TermTrial]) -> "TermSelection":
+        """This selection (of a search without the terms ``refused``) with a row for each of
+        them — name -> its row when the evidence kept it, its ``reason`` why the sampler
+        failed (:func:`refused_term`) — in the canonical order."""
+        rows = {trial.term: trial for trial in self.trials}
+        for term, kept in refused.items():
+            rows[term] = TermTrial(
+                term,
+                kept.log_bayes_factor,
+                False,
+                f"refused: the evidence kept it (log BF {kept.log_bayes_factor:.1f}), but the "
+                f"sampler could not explore its posterior ({kept.reason}); the model without "
+                "it is the one reported",
+            )
+        trials = tuple(rows[term] for term in ALL_TERMS if term in rows)
+        return dataclasses.replace(self, trials=trials)
 
 
 class _Families:
@@ -185,6 +205,7 @@ def select_noise_terms(
     base: tuple[str, ...] = ("white",),
     threshold: float = DECISIVE_LOG_BAYES_FACTOR,
     misfit: Callable[[NoiseModel], str] | None = None,
+    found: dict | None = None,
 ) -> TermSelection:
     """The noise terms a record holds decisive evidence for (module docstring).
 
@@ -211,6 +232,12 @@ def select_noise_terms(
         :func:`~bayescal.inference._checks.noise_model_checker`. Given, a chosen model that
         misfits takes on left-out terms, in the order of their evidence, until it fits
         (module docstring).
+    found : dict, optional
+        What the terms found in the record found there (name -> finding,
+        :func:`~bayescal.models._terms.find_in_record`; the summaries are of the record less
+        it): such a term is in the model where it found something, by its own test, and its
+        row says what that test found. A candidate found in the record that is not in
+        ``found`` is neither searched nor listed.
 
     Returns
     -------
@@ -221,6 +248,8 @@ def select_noise_terms(
     unknown = [t for t in candidates if t not in CANDIDATE_TERMS]
     if unknown:
         raise InputError(f"candidates: {unknown[0]!r} is not a candidate term ({CANDIDATE_TERMS})")
+    found = {t: finding for t, finding in (found or {}).items() if t in candidates}
+    candidates = tuple(t for t in candidates if t not in FOUND_TERMS)
     families = _Families(spectral, level, prior_of, lsb)
 
     def gain(model: frozenset, term: str) -> float:
@@ -248,9 +277,13 @@ def select_noise_terms(
         }
         # The fit may have swapped a shape back: a reason holds only for where its term is.
         reasons = {t: r for t, r in reasons.items() if (t in model) == r.startswith("kept")}
+    present = {t for t, finding in found.items() if finding.found}
     return TermSelection(
-        terms=tuple(t for t in ALL_TERMS if t in model),
-        trials=tuple(_trial(families, model, t, threshold, reasons.get(t, "")) for t in candidates),
+        terms=tuple(t for t in ALL_TERMS if t in model | present),
+        trials=(
+            *(_trial(families, model, t, threshold, reasons.get(t, "")) for t in candidates),
+            *(_found_trial(t, finding) for t, finding in found.items()),
+        ),
         log_evidence=families.log_evidence(model),
         estimates=families.estimates(model),
         context=families.fits[model][0].context,
@@ -370,6 +403,13 @@ def _with(model: frozenset, term: str) -> frozenset:
     return model | {term}
 
 
+def _found_trial(term: str, finding) -> TermTrial:
+    """The row of a term found in the record: what its own test found."""
+    if finding.found:
+        return TermTrial(term, finding.log_bayes_factor, True, f"kept: {finding.verdict}")
+    return TermTrial(term, finding.log_bayes_factor, False, f"left out: {finding.verdict}")
+
+
 def _trial(
     families: _Families, model: frozenset, term: str, threshold: float, why_kept: str
 ) -> TermTrial:
@@ -399,3 +439,25 @@ def _trial(
     else:
         reason = f"left out: log BF {factor:.1f} < {bar} for adding it"
     return TermTrial(term, factor, False, reason)
+
+
+def refused_term(posterior, selection: TermSelection) -> TermTrial | None:
+    """The term of a posterior whose sampler failed its checks that the search refuses, with
+    its row as the evidence kept it and why (in its ``reason``); None when none can be:
+    the candidate term (not white noise, not one found in the record) whose parameters have
+    the longest autocorrelation time — where a ridge or a second mode holds the walkers."""
+    diagnostics = posterior.diagnostics
+    if diagnostics.passed:
+        return None
+    kept = {trial.term: trial for trial in selection.trials if trial.kept}
+    longest = {
+        term: max(diagnostics.autocorr_time.get(p, 0.0) for p in PARAMETERS_OF_TERM[term])
+        for term in selection.terms
+        if term in kept and term not in FOUND_TERMS and PARAMETERS_OF_TERM[term]
+    }
+    if not longest:
+        return None
+    term = max(longest, key=longest.get)
+    failures = "; ".join(diagnostics.failures)
+    why = f"{failures}; its parameters' autocorrelation time {longest[term]:.0f} steps"
+    return dataclasses.replace(kept[term], reason=why)

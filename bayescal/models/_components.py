@@ -72,7 +72,15 @@ class Components(eqx.Module):
     def weights(self, values: dict):
         """(..., components): each component's weight at ``values`` (parameters by name;
         arrays broadcast); zero for a term whose parameters ``values`` lacks."""
-        batch = jnp.broadcast_shapes(*(jnp.shape(v) for v in values.values()))
+        # The batch of draws is that of these terms' parameters (a line's are per line).
+        batch = jnp.broadcast_shapes(
+            *(
+                jnp.shape(values[p.name])
+                for t in self.terms
+                for p in t.parameters
+                if p.name in values
+            )
+        )
         parts = []
         for term, count in zip(self.terms, self.counts, strict=True):
             present = all(p.name in values for p in term.parameters)

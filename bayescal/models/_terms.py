@@ -26,6 +26,7 @@ from .effects.output_filter import OutputFilter
 from .effects.quantization import Quantization
 from .effects.rate_ramp import RateRamp
 from .effects.rate_random_walk import RateRandomWalk
+from .effects.spectral_lines import SpectralLines
 from .effects.white import White
 
 NOISE_TERMS: tuple[type[NoiseTerm], ...] = (
@@ -39,9 +40,11 @@ NOISE_TERMS: tuple[type[NoiseTerm], ...] = (
     RateRandomWalk,
     RateRamp,
     GaussMarkov,
+    SpectralLines,
 )
 """Every noise term, in the canonical order (by the slope of its Allan deviation, as IEEE Std
-952's table: -1, -1/2 and the output filter's shapes, 0, +1/2, +1, then the bump)."""
+952's table: -1, -1/2 and the output filter's shapes, 0, +1/2, +1, then the bump and the
+lines)."""
 
 TERMS = {term.name: term for term in NOISE_TERMS}
 """Every noise term by its name."""
@@ -61,6 +64,9 @@ FILTER_SHAPE_OF_TERM = {
 """The output filter's terms, one per shape: a model holds at most one of them."""
 CANDIDATE_TERMS = tuple(term.name for term in NOISE_TERMS if term.candidate)
 """The terms ``auto`` tries beside white noise (at most one output filter shape)."""
+FOUND_TERMS = tuple(term.name for term in NOISE_TERMS if term.found_in_record)
+"""The terms found in the record before the stochastic terms are fitted (their parameters
+are estimated there, never sampled)."""
 READINGS = {
     term.parameters[0].name: term.reading for term in NOISE_TERMS if term.reading is not None
 }
@@ -116,7 +122,13 @@ def check_terms(terms: tuple[str, ...]) -> tuple[str, ...]:
     unknown = [t for t in terms if t not in TERMS]
     if unknown:
         raise InputError(f"terms: unknown term {unknown[0]!r}", fix=f"choose from {ALL_TERMS}")
-    stochastic = [t for t in terms if TERMS[t].filter_shape is None and TERMS[t].mean_rate is None]
+    stochastic = [
+        t
+        for t in terms
+        if TERMS[t].filter_shape is None
+        and TERMS[t].mean_rate is None
+        and not TERMS[t].found_in_record
+    ]
     if not stochastic:
         raise InputError("terms: the model needs at least one noise term (e.g. white)")
     filters = [t for t in terms if t in FILTER_SHAPE_OF_TERM]
@@ -154,8 +166,11 @@ def fleet_terms(terms) -> tuple[str, ...]:
 
 
 def term_parameters(terms: tuple[str, ...]) -> tuple[str, ...]:
-    """The parameters of ``terms``, in order."""
-    return tuple(p for term in terms for p in PARAMETERS_OF_TERM[term])
+    """The sampled parameters of ``terms``, in order (a term found in the record has none:
+    its parameters are estimated before the fit)."""
+    return tuple(
+        p for term in terms if not TERMS[term].found_in_record for p in PARAMETERS_OF_TERM[term]
+    )
 
 
 def parameter(name: str) -> Parameter:
@@ -222,3 +237,38 @@ def reference_scales(allan) -> dict[str, float]:
     """The level of each noise parameter the classical Allan curve allows (its upper bound,
     DESIGN.md table): the centres of the weakly informative priors, and the ramp's scale."""
     return {k: v for term in NOISE_TERMS for k, v in term.reference_scales(allan).items()}
+
+
+def find_in_record(terms, values, rate_hz: float) -> dict:
+    """What each term of ``terms`` found in the record before the fit (the terms
+    :attr:`~bayescal.models.effects._base.NoiseTerm.found_in_record`: spectral lines), by
+    name: each an object with ``found``, ``removed``, ``excluded_bands_hz``, ``verdict`` and
+    ``log_bayes_factor``."""
+    return {
+        term.name: term.find(values, rate_hz)
+        for term in NOISE_TERMS
+        if term.found_in_record and term.name in terms
+    }
+
+
+def without_found(found: dict, values):
+    """``values`` less what the terms found in them (:func:`find_in_record`): what the
+    stochastic terms are fitted to. ``values`` itself when nothing was found."""
+    for finding in found.values():
+        if finding.found:
+            values = finding.removed(values)
+    return values
+
+
+def excluded_bands(found: dict) -> tuple[tuple[float, float], ...]:
+    """The bands, Hz, the stochastic fit leaves out for what the terms found."""
+    return tuple(band for finding in found.values() for band in finding.excluded_bands_hz)
+
+
+def left_in(found: dict) -> dict:
+    """What the terms found in the record leave in it (a broadened line), as a noise model's
+    parameters: the checks of a model fitted to the record less them add it."""
+    values = {}
+    for finding in found.values():
+        values |= finding.left_in
+    return values

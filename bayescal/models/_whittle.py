@@ -65,9 +65,9 @@ from scipy import fft
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
+from ..classical._periodogram import TAPER_FRACTION, fast_length_at_most, tukey_window
 from ..recording._series import gap_free_runs, is_spooled, read, series_size
 
-TAPER_FRACTION = 0.1
 BIN_WIDTH = 0.02
 MIN_INCREMENTS = 32
 MAX_SEGMENT = 1 << 21
@@ -140,14 +140,6 @@ def _segment_bounds(values, minimum: int) -> list[tuple[int, int]]:
     return bounds
 
 
-def _fast_length_at_most(length: int) -> int:
-    """The longest length <= ``length`` whose prime factors are 2, 3 and 5."""
-    candidate = length
-    while fft.next_fast_len(candidate, real=True) != candidate:
-        candidate -= 1
-    return candidate
-
-
 def _bin_edges(n_frequencies: int, width: float) -> np.ndarray:
     """Edges (in frequency index, from 1) of bins of relative width ``width``; a bin holds one
     frequency until three or more fit in one."""
@@ -159,26 +151,6 @@ def _bin_edges(n_frequencies: int, width: float) -> np.ndarray:
             high = low + 1
         edges.append(min(high, n_frequencies + 1))
     return np.array(edges)
-
-
-def tukey_window(length: int, fraction: float) -> np.ndarray:
-    """The symmetric Tukey (tapered cosine) window of ``length`` points whose tapers span
-    ``fraction`` (0 < fraction < 1) of it, as ``scipy.signal.windows.tukey`` computes it
-    (importing ``scipy.signal`` costs a run 1.7 s)."""
-    if length <= 1:
-        return np.ones(length)
-    n = np.arange(length, dtype=float)
-    width = math.floor(fraction * (length - 1) / 2.0)
-    rising = n[: width + 1]
-    falling = n[length - width - 1 :]
-    return np.concatenate(
-        (
-            0.5 * (1 + np.cos(np.pi * (-1 + 2.0 * rising / fraction / (length - 1)))),
-            np.ones(max(length - 2 * width - 2, 0)),
-            0.5
-            * (1 + np.cos(np.pi * (-2.0 / fraction + 1 + 2.0 * falling / fraction / (length - 1)))),
-        )
-    )
 
 
 @functools.lru_cache(maxsize=4)
@@ -274,6 +246,7 @@ def spectral_summary(
     bin_width: float = BIN_WIDTH,
     regressors=None,
     extra_components=(),
+    exclude=(),
 ) -> SpectralSummary:
     """Summarise a rate series (NaN marks missing samples) for the Whittle likelihood.
 
@@ -282,7 +255,8 @@ def spectral_summary(
     deterministic terms whose coefficients the likelihood takes
     (:func:`whittle_log_likelihood`, ``beta``); ``extra_components``: functions of the lag
     giving the increment autocovariance of further stationary terms, appended to the basis in
-    that order."""
+    that order; ``exclude``: bands (low, high), Hz, whose Fourier frequencies the likelihood
+    leaves out (a broadened spectral line's), a bin left empty dropped."""
     regressors = None if regressors is None else np.asarray(regressors, dtype=float)
     cross, gram, mean_regressor = [], [], []
     parts = {
@@ -294,7 +268,7 @@ def spectral_summary(
     values = values if is_spooled(values) else np.asarray(values, dtype=float)
     for start, stop in _segment_bounds(values, MIN_INCREMENTS):
         increments = np.diff(read(values, start, stop))
-        increments = increments[: _fast_length_at_most(increments.size)]
+        increments = increments[: fast_length_at_most(increments.size)]
         length = increments.size
         taper, _ = _taper(length, taper_fraction)
         mean = float(np.dot(taper, increments) / taper.sum())
@@ -308,6 +282,10 @@ def spectral_summary(
         counts = highs - lows
         u = np.log(np.arange(1, n_frequencies + 1) / length)
         hats = _hats(u, lows, counts)
+        present = _outside(np.arange(1, n_frequencies + 1) * rate_hz / length, exclude)
+        hats = hats * present
+        kept = np.add.reduceat(present, lows - 1)
+        keep = kept > 0
         if regressors is not None:
             x_increments = np.diff(regressors[start:stop], axis=0)[:length]
             x_mean = taper @ x_increments / taper.sum()
@@ -318,7 +296,7 @@ def spectral_summary(
             cross.append(
                 _bin_sums(
                     y_part.real[:, None] * real + y_part.imag[:, None] * imaginary, hats, lows - 1
-                )
+                )[..., keep]
                 / norm
             )
             gram.append(
@@ -327,7 +305,7 @@ def spectral_summary(
                     + imaginary[:, :, None] * imaginary[:, None, :],
                     hats,
                     lows - 1,
-                )
+                )[..., keep]
                 / norm
             )
             mean_regressor.append(x_mean)
@@ -343,13 +321,15 @@ def spectral_summary(
         )
         mean_increment.append(mean)
         mean_basis.append(expected[:, 0] * norm / taper.sum() ** 2)
-        basis.append(expected[:, 1:].reshape(expected.shape[0], 3, -1))
-        parts["count"].append(counts)
-        parts["frequency_hz"].append(np.exp(np.add.reduceat(u, lows - 1) / counts) * rate_hz)
-        parts["node_power"].append(_bin_sums(periodogram[1 : n_frequencies + 1], hats, lows - 1))
-        parts["node_count"].append(_bin_sums(np.ones_like(u), hats, lows - 1))
-        parts["node_frequency"].append(nodes / length)
-        weight.append(np.full(counts.size, information))
+        basis.append(expected[:, 1:].reshape(expected.shape[0], 3, -1)[..., keep])
+        parts["count"].append(kept[keep].astype(int))
+        frequency = np.exp(np.add.reduceat(u, lows - 1) / counts) * rate_hz
+        parts["frequency_hz"].append(frequency[keep])
+        power = _bin_sums(periodogram[1 : n_frequencies + 1], hats, lows - 1)
+        parts["node_power"].append(power[:, keep])
+        parts["node_count"].append(_bin_sums(np.ones_like(u), hats, lows - 1)[:, keep])
+        parts["node_frequency"].append(nodes[:, keep] / length)
+        weight.append(np.full(int(keep.sum()), information))
         lengths.append(length)
     if not parts["count"]:
         raise InputError(
@@ -390,6 +370,14 @@ def spectral_summary(
         components=components,
         **regression,
     )
+
+
+def _outside(frequency_hz: np.ndarray, bands) -> np.ndarray:
+    """1.0 for each frequency outside every band (low, high), else 0.0."""
+    present = np.ones(frequency_hz.size)
+    for low, high in bands:
+        present[(frequency_hz >= low) & (frequency_hz <= high)] = 0.0
+    return present
 
 
 def node_spectrum(summary: SpectralSummary, variances, filtered=None):

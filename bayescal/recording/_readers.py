@@ -230,10 +230,10 @@ def _read_text(path: Path, source: str, options: dict) -> dict:
             source=source,
             fix='give the names alone: names=["a", "b", "c"]',
         )
-    table, notes = read_text_arrow(path, source, options.get("skip_rows") or 0, names)
+    table, notes, metadata = read_text_arrow(path, source, options.get("skip_rows") or 0, names)
     if table.num_rows == 0:
         raise InputError("the file holds no data rows", source=source)
-    return {**_arrow_columns(table, notes), "notes": tuple(notes)}
+    return {**_arrow_columns(table, notes), "notes": tuple(notes), "metadata": metadata}
 
 
 def _read_parquet(path: Path, source: str) -> dict:

@@ -25,8 +25,11 @@ the input is odd but may be meant):
   4 g: raw counts, probably — an error when the unit was assumed, a note when it was given;
 - a unit bayescal does not know (other than counts: LSB, counts, V ...), a unit of the other
   kind of sensor than the name says, ``--unit`` overriding the header: notes;
-- a placeholder first row of zeros (every column 0, far from the rest of the record): left
-  out by :func:`load_recording`, with a note.
+- a logger's placeholder rows — 0 in every sensor column (gyros and accelerometers, by name
+  or header unit; every column but time where none is named so) while the rows beside them
+  are not, 0 being far from the rest of the record: left out by :func:`load_recording`, with
+  a note; those leading the file are dropped, those further on become missing samples, kept
+  in their place on the grid (a time column's stamps or an even rate alike).
 """
 
 import math
@@ -98,6 +101,13 @@ class Recording:
     """What the reader inferred (an encoding, generated names, a placeholder row left out)."""
     row_offset: int = 0
     """Data rows of the file left out before the first row here (a placeholder row)."""
+    metadata: dict = field(default_factory=dict)
+    """What a text table's metadata lines state: ``rate_hz`` and ``unit``, each with the
+    line it comes from (``rate_line``, ``unit_line``); used where the file gives no time
+    column, no header unit."""
+    placeholder_rows: tuple[int, ...] = ()
+    """Rows (from 0, here) that held a logger's placeholder — 0 in every sensor column while
+    their neighbours do not — now missing samples (NaN in the sensor columns)."""
 
     @property
     def n_rows(self) -> int:
@@ -259,8 +269,10 @@ def load_recording(
     NumPy (.npz, .npy) or MATLAB (.mat v4/5/7.3) arrays, or the ``sensor_msgs/Imu`` topic
     ``topic`` of a ROS bag (its only one when None).
 
-    A first row of zeros in every column, far from the rest of the record (a logger's
-    placeholder), is left out with a note; messages still count rows as the file does.
+    A logger's placeholder rows (0 in every sensor column while the rows beside them are not,
+    far from the rest of the record) are left out with a note: those leading the file are
+    dropped, those further on become missing samples; messages still count rows as the file
+    does.
 
     Parameters
     ----------
@@ -319,41 +331,98 @@ def _robust_spread(values: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(values - median)) or np.std(values))
 
 
-def _without_placeholder(recording: Recording) -> Recording:
-    """The recording without leading rows that hold 0 in every column (time columns aside)
-    when 0 is far from the rest of the record in at least one of them."""
-    data = [
-        values
-        for name, values in recording.columns.items()
-        if not _is_time_column(name, recording.header_units)
+def _sensor_columns(recording: Recording) -> list[str]:
+    """The columns of a gyro or an accelerometer (by name, or by the unit the header gives
+    them); every column but time where none is named so."""
+    units = recording.header_units
+    candidates = [name for name in recording.columns if not _is_time_column(name, units)]
+    sensors = [
+        name
+        for name in candidates
+        if is_gyro_name(name)
+        or is_accel_name(name)
+        or (name in units and parse_unit(units[name]).quantity in ("angular_rate", "acceleration"))
     ]
-    n = recording.n_rows
-    if not data or n <= MIN_SAMPLES + 1:
-        return recording
-    zeros = 0
-    while zeros < min(_PLACEHOLDER_ROWS, n - MIN_SAMPLES) and all(v[zeros] == 0 for v in data):
-        zeros += 1
-    if not zeros:
-        return recording
+    return sensors or candidates
+
+
+def _placeholder_mask(recording: Recording, sensors: list[str]) -> np.ndarray:
+    """Rows that hold exactly 0 in every sensor column, in runs of at most
+    :data:`_PLACEHOLDER_ROWS` beside rows that do not, where 0 is far from the rest of the
+    record in at least one of those columns (a logger's placeholder, not a reading)."""
+    zero = np.ones(recording.n_rows, dtype=bool)
+    for name in sensors:
+        zero &= recording.columns[name] == 0
+    if not zero.any() or zero.all():
+        return np.zeros(recording.n_rows, dtype=bool)
     far = False
-    for values in data:
-        rest = values[zeros:][np.isfinite(values[zeros:])]
+    for name in sensors:
+        rest = recording.columns[name][~zero]
+        rest = rest[np.isfinite(rest)]
         if rest.size and abs(np.median(rest)) > RAIL_SIGMAS * _robust_spread(rest):
             far = True
             break
     if not far:
+        return np.zeros(recording.n_rows, dtype=bool)
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], zero.astype(np.int8), [0]))))
+    mask = np.zeros(recording.n_rows, dtype=bool)
+    for start, stop in zip(edges[::2], edges[1::2], strict=True):
+        if stop - start <= _PLACEHOLDER_ROWS:
+            mask[start:stop] = True
+    return mask
+
+
+def _rows_text(rows: np.ndarray, offset: int) -> str:
+    """'data row 5 holds' or 'data rows 5, 9 and 12 hold' (the first ten), counting the
+    file's rows."""
+    numbers = [str(int(row) + 1 + offset) for row in rows[:10]]
+    if len(numbers) == 1:
+        return f"data row {numbers[0]} holds"
+    more = f" and {rows.size - 10} more" if rows.size > 10 else ""
+    return f"data rows {', '.join(numbers[:-1])} and {numbers[-1]}{more} hold"
+
+
+def _without_placeholder(recording: Recording) -> Recording:
+    """The recording without a logger's placeholder rows (:func:`_placeholder_mask`), with a
+    note: those that lead the file are left out; those further on become missing samples
+    (NaN in the sensor columns: :func:`prepare_channel` keeps their place on the grid)."""
+    sensors = _sensor_columns(recording)
+    if not sensors or recording.n_rows <= MIN_SAMPLES + 1:
         return recording
-    rows = "data row 1 holds" if zeros == 1 else f"data rows 1 to {zeros} hold"
-    note = (
-        f"{rows} 0 in every column, far from the rest of the record (a logger's placeholder "
-        "before its first reading): left out"
-    )
+    mask = _placeholder_mask(recording, sensors)
+    if not mask.any():
+        return recording
+    leading = int(np.argmin(mask)) if not mask.all() else mask.size
+    named = ", ".join(sensors[:6]) + (" ..." if len(sensors) > 6 else "")
+    notes = list(recording.notes)
+    columns = dict(recording.columns)
+    file_columns = recording.file_columns
+    if leading:
+        rows = "data row 1 holds" if leading == 1 else f"data rows 1 to {leading} hold"
+        notes.append(
+            f"{rows} 0 in every sensor column ({named}), far from the rest of the record (a "
+            "logger's placeholder before its first reading): left out"
+        )
+        columns = {name: values[leading:] for name, values in columns.items()}
+        file_columns = tuple((name, values[leading:]) for name, values in file_columns)
+    later = np.flatnonzero(mask[leading:])
+    if later.size:
+        notes.append(
+            f"{_rows_text(later, recording.row_offset + leading)} 0 in every sensor "
+            f"column ({named}) while the rows beside them do not (a logger's placeholder, "
+            "not a reading): left out as missing samples"
+        )
+        for name in sensors:
+            values = columns[name].copy()
+            values[later] = np.nan
+            columns[name] = values
     return replace(
         recording,
-        columns={name: values[zeros:] for name, values in recording.columns.items()},
-        file_columns=tuple((name, values[zeros:]) for name, values in recording.file_columns),
-        notes=(*recording.notes, note),
-        row_offset=recording.row_offset + zeros,
+        columns=columns,
+        file_columns=file_columns,
+        notes=tuple(notes),
+        row_offset=recording.row_offset + leading,
+        placeholder_rows=tuple(int(row) for row in later),
     )
 
 
@@ -413,6 +482,14 @@ def _resolve_unit(table: Recording, column: str, given: str | None) -> tuple[str
         return parse_unit(given).name, None, "given"
     if column in table.header_units:
         return parse_unit(table.header_units[column]).name, None, "header"
+    stated = table.metadata.get("unit")
+    if stated and _unit_fits_name(stated, column):
+        unit = parse_unit(stated).name
+        return (
+            unit,
+            f"unit of '{column}' from the file's metadata ({table.metadata['unit_line']})",
+            "header",
+        )
     from_suffix = unit_from_column_suffix(column)
     if from_suffix:
         return (
@@ -435,6 +512,18 @@ def _resolve_unit(table: Recording, column: str, given: str | None) -> tuple[str
         f"unit of '{column}' not given; assumed {assumed} (pass --unit to override)",
         "assumed",
     )
+
+
+def _unit_fits_name(unit: str, column: str) -> bool:
+    """Whether a unit stated for the whole file suits ``column``: of the kind its name says
+    (a rate for a gyro, an acceleration for an accelerometer), or of either kind for a name
+    that says neither."""
+    quantity = parse_unit(unit).quantity
+    if is_gyro_name(column) and not is_accel_name(column):
+        return quantity == "angular_rate"
+    if is_accel_name(column) and not is_gyro_name(column):
+        return quantity == "acceleration"
+    return quantity in ("angular_rate", "acceleration")
 
 
 def resolve_unit(table: Recording, column: str, given: str | None) -> tuple[str, str | None]:
@@ -919,6 +1008,13 @@ def _time_base(
             else []
         )
         return np.arange(n_rows) / rate, None, notes, True, None
+    if time_name is None and "rate_hz" in table.metadata:
+        rate = table.metadata["rate_hz"]
+        note = (
+            f"sample rate {rate:g} Hz from the file's metadata ({table.metadata['rate_line']}): "
+            "samples taken as evenly spaced"
+        )
+        return np.arange(n_rows) / rate, None, [note], True, None
     if time_name is None:
         raise InputError(
             "no time column ('time' or 't') and no rate_hz=",
@@ -967,6 +1063,23 @@ def _check_window(start, stop) -> None:
             raise InputError(f"{argument}={value} must be a finite number of seconds")
     if start is not None and stop is not None and stop <= start:
         raise InputError(f"stop={stop:g} s must come after start={start:g} s")
+
+
+def _placeholders_filled(table: Recording, values: np.ndarray, first: int, last: int):
+    """The window's values as the checks read them: a placeholder row's missing sample
+    (:func:`_without_placeholder`) stands at the median of the others there, so that the
+    checks neither refuse it nor count it; the grid leaves it out (NaN). The window's values
+    themselves when it holds none."""
+    rows = np.asarray(table.placeholder_rows, dtype=int)
+    inside = rows[(rows >= first) & (rows < last)] - first
+    window = values[first:last]
+    if not inside.size or not np.all(np.isnan(window[inside])):
+        return window
+    checked = window.copy()
+    present = np.ones(window.size, dtype=bool)
+    present[inside] = False
+    checked[inside] = np.median(window[present])
+    return checked
 
 
 def prepare_channel(
@@ -1042,27 +1155,34 @@ def prepare_channel(
             fix="widen the window (start=/stop=) or record longer",
         )
     window = slice(first, last)
-    extremes = _check_finite(values[window], place, first, table.source, channel)
-    _check_magnitude(values[window], extremes, place, first, table.source, channel, resolved_unit)
+    checked = _placeholders_filled(table, values, first, last)
+    extremes = _check_finite(checked, place, first, table.source, channel)
+    _check_magnitude(checked, extremes, place, first, table.source, channel, resolved_unit)
     if rate is None:
         positions, rate, grid_notes = _grid_positions(
             relative, window, place, table.source, time_name, gaps, raw_time
         )
         notes.extend(_check_rate(rate, declared, table.source, time_name))
         notes.extend(grid_notes)
+        stated = table.metadata.get("rate_hz")
+        if time_name is not None and stated and abs(rate / stated - 1) > 0.01:
+            notes.append(
+                f"the file's metadata states {stated:g} Hz ({table.metadata['rate_line']}); "
+                f"its time stamps give {rate:.6g} Hz, which is used"
+            )
     else:
         positions = None
     # One median for the three checks: a pass over the record costs ~0.2 s at 10^7 samples.
-    median = float(np.median(values[window]))
+    median = float(np.median(checked))
     _check_constant_and_rail(
-        values[window], extremes, median, place, first, table.source, channel, resolved_unit
+        checked, extremes, median, place, first, table.source, channel, resolved_unit
     )
     if at_rest:
-        _check_glitches(values[window], median, place, first, table.source, channel, resolved_unit)
+        _check_glitches(checked, median, place, first, table.source, channel, resolved_unit)
     notes.extend(
         _static_plausibility(median, resolved_unit, how, scale is not None, table.source, channel)
     )
-    notes.extend(_clipping_notes(values[window], resolved_unit))
+    notes.extend(_clipping_notes(checked, resolved_unit))
     grid = _on_grid(values[window], positions)
     grid_temperature = None
     if temperature_values is not None:

@@ -93,7 +93,7 @@ def _text_batches(path: Path, source: str, columns, skip_rows: int) -> Iterator:
 
     from ._text import text_arrow_options
 
-    stream, read, parse, convert, _ = text_arrow_options(path, source, skip_rows, None)
+    stream, read, parse, convert, _, _ = text_arrow_options(path, source, skip_rows, None)
     if columns is not None:
         convert.include_columns = columns
     try:

@@ -7,9 +7,15 @@ What is read, and how it is told apart (from the first megabyte of the file):
   Windows logger is then read right).
 - **Lines before the table**: ``--skip-rows N`` skips the first N lines (logger metadata);
   then lines that start with ``#`` and blank lines are skipped; Excel's ``sep=;`` first line
-  is skipped and names the delimiter. Other lines before the
-  header whose number of fields differs from the table's are refused with the count to pass
-  to ``--skip-rows``: a guess could drop a real header.
+  is skipped and names the delimiter. A logger's metadata lines — a key and one value, such
+  as ``Fs,100``, ``Sample rate (Hz): 819.2`` or ``Units,deg/s`` — are read wherever they
+  stand before the header (skipped lines included): a sample rate or a unit they state is
+  used where the file gives none of its own (a time column, a unit in the header) and a note
+  says so (:data:`RATE_KEYS`, :data:`UNIT_KEYS`); other metadata lines are skipped with a
+  note. Other lines before the header whose number of fields differs from the table's are
+  refused with the count to pass to ``--skip-rows``: a guess could drop a real header.
+- **A units row**: a line right after the header whose every field is a unit (or empty),
+  ``s,deg/s,deg/s,g``, gives the columns' units, as ``gyro_x[deg/s]`` in the header would.
 - **Delimiter**: the first of tab, semicolon, comma, ``|`` that splits the header and the
   first lines into the same number (> 1) of fields; else runs of spaces (a column-aligned
   table, as MATLAB's ``save -ascii`` writes).
@@ -48,6 +54,16 @@ _COMMA_NUMBER = re.compile(r"^\s*[-+]?\d+,\d+(?:[eE][-+]?\d+)?\s*$")
 _TIME_OF_DAY = re.compile(r"^\s*(\d{1,2}):(\d{2}):(\d{2}(?:\.\d*)?)\s*$")
 _SAMPLE_LINES = 20
 _DAY_S = 86400.0
+RATE_KEYS = re.compile(
+    r"^(fs|sample[ _-]?rate|sampling[ _-]?(rate|frequency)|rate|odr|output[ _-]?data[ _-]?rate|"
+    r"data[ _-]?rate|frequency|freq)\s*(\[?\(?\s*hz\s*\)?\]?)?$",
+    re.I,
+)
+"""Metadata keys that state a sample rate (in Hz, or with the unit after the number)."""
+UNIT_KEYS = re.compile(r"^units?$", re.I)
+"""Metadata keys that state the channels' unit."""
+_KEY = re.compile(r"^[A-Za-z][A-Za-z0-9 _()\[\]/.-]*$")
+_RATE_VALUE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(k?hz)?\s*$", re.I)
 
 
 def _encoding(head: bytes) -> tuple[str, str | None]:
@@ -100,6 +116,63 @@ def _is_number(text: str, decimal_comma: bool) -> bool:
     return bool(_NUMBER.match(text) or (decimal_comma and _COMMA_NUMBER.match(text)))
 
 
+def _key_value(line: str, delimiter: str) -> tuple[str, str] | None:
+    """(key, value) of a metadata line: a key and one value, split by the table's delimiter,
+    ':' or '=' (empty fields after them allowed); None for any other line."""
+    for separator in (delimiter, ":", "="):
+        split = _fields(line, separator) if separator == delimiter else line.split(separator, 1)
+        fields = [field.strip() for field in split]
+        while fields and not fields[-1]:
+            fields.pop()
+        if len(fields) == 2 and _KEY.match(fields[0]) and fields[1]:
+            return fields[0], fields[1]
+    return None
+
+
+def _metadata(pairs: list[tuple[int, str, str, str]]) -> tuple[dict, list[str]]:
+    """What metadata lines ((line number, key, value, the line)) state — ``rate_hz`` and
+    ``unit``, each with its line — and the notes on the lines it does not use."""
+    from ._units import parse_unit
+
+    metadata, skipped = {}, []
+    for number, key, value, text in pairs:
+        shown = text.strip() if len(text.strip()) <= 40 else text.strip()[:37] + "..."
+        rate = _RATE_VALUE.match(value)
+        if RATE_KEYS.match(key) and rate and float(rate[1]) > 0:
+            factor = 1000.0 if (rate[2] or "").lower() == "khz" else 1.0
+            metadata["rate_hz"] = float(rate[1]) * factor
+            metadata["rate_line"] = f"line {number}, '{shown}'"
+            continue
+        if UNIT_KEYS.match(key) and _known_unit(value, parse_unit):
+            metadata["unit"] = value
+            metadata["unit_line"] = f"line {number}, '{shown}'"
+            continue
+        skipped.append(f"'{shown}' (line {number})")
+    notes = [f"metadata line(s) before the header skipped: {', '.join(skipped)}"] if skipped else []
+    return metadata, notes
+
+
+def _known_unit(text: str, parse_unit) -> bool:
+    try:
+        return parse_unit(text).known
+    except ValueError:
+        return False
+
+
+def _units_row(line: str, delimiter: str, width: int) -> list[str] | None:
+    """The units of a line that holds a unit (or nothing) in every field, at least one a unit
+    bayescal knows; None for any other line."""
+    from ._units import is_count_unit, parse_unit
+
+    fields = [f.strip() for f in _fields(line, delimiter)]
+    if len(fields) != width or any(_NUMBER.match(f) for f in fields if f):
+        return None
+    present = [field for field in fields if field]
+    if not present or not all(_known_unit(f, parse_unit) or is_count_unit(f) for f in present):
+        return None
+    return fields
+
+
 def sniff_table(path: Path, source: str, skip_rows: int) -> dict:
     """How to read the text table at ``path``: encoding, lines to skip, delimiter, decimal
     point, whether the first table line is a header; with the notes to give."""
@@ -135,6 +208,25 @@ def sniff_table(path: Path, source: str, skip_rows: int) -> dict:
     if separator is not None:
         delimiter = separator
         width = Counter(len(_fields(line, delimiter)) for line in sample).most_common(1)[0][0]
+    # Metadata lines: among the lines skipped, and those that lead the table while a line
+    # that is not one follows (the header).
+    excel = 1 if separator is not None else 0  # Excel's sep= line is no metadata
+    pairs = [
+        (number + 1, *pair, line)
+        for number, line in enumerate(lines[:skip_rows])
+        if number >= excel and (pair := _key_value(line, delimiter)) is not None
+    ]
+    while len(table) > 1 and (pair := _key_value(table[0], delimiter)) is not None:
+        if width == 2 and not _RATE_VALUE.match(pair[1]) and not UNIT_KEYS.match(pair[0]):
+            break  # a header of two names, not a key and its value
+        pairs.append((skipped + 1, *pair, table[0]))
+        skipped += 1
+        while skipped < len(lines) and (
+            not lines[skipped].strip() or lines[skipped].startswith("#")
+        ):
+            skipped += 1
+        table = lines[skipped:]
+    metadata, metadata_notes = _metadata(pairs)
     last = tail.decode(encoding, errors="replace").splitlines()[-1:] if tail else []
     cut = (
         last[0]
@@ -159,7 +251,10 @@ def sniff_table(path: Path, source: str, skip_rows: int) -> dict:
     decimal_comma = delimiter != "," and any(_COMMA_NUMBER.match(c) for c in data_cells)
     first = _fields(table[0], delimiter)
     has_header = not all(_is_number(cell, decimal_comma) for cell in first if cell.strip())
+    units = _units_row(table[1], delimiter, width) if has_header and len(table) > 2 else None
     return {
+        "metadata": metadata,
+        "units_row": units,
         "encoding": encoding,
         "skip": skipped,
         "delimiter": delimiter,
@@ -167,7 +262,7 @@ def sniff_table(path: Path, source: str, skip_rows: int) -> dict:
         "has_header": has_header,
         "width": width,
         "cut_last_line": cut,
-        "notes": [note] if note else [],
+        "notes": ([note] if note else []) + metadata_notes,
     }
 
 
@@ -184,8 +279,8 @@ def _spaces_to_commas(path: Path, encoding: str, skip: int, cut: str | None) -> 
 
 def text_arrow_options(path: Path, source: str, skip_rows: int, names: list[str] | None):
     """How pyarrow reads the text table at ``path``: (source stream, read, parse and convert
-    options, the reader's notes) — for one read (:func:`read_text_arrow`) or a stream of
-    blocks (:mod:`bayescal.recording._stream`)."""
+    options, the reader's notes, what its metadata lines state) — for one read
+    (:func:`read_text_arrow`) or a stream of blocks (:mod:`bayescal.recording._stream`)."""
     import pyarrow.csv as pa_csv
 
     layout = sniff_table(path, source, skip_rows)
@@ -199,7 +294,21 @@ def text_arrow_options(path: Path, source: str, skip_rows: int, names: list[str]
         )
     column_names = names
     skip = layout["skip"]
-    if not layout["has_header"]:
+    units = layout["units_row"]
+    if units is not None and names is None:
+        # The units row stands as each column's bracketed unit, as gyro_x[deg/s] would.
+        header = [f.strip() for f in _fields(_line_at(path, layout, skip), layout["delimiter"])]
+        column_names = [
+            f"{name}[{unit}]" if unit and "[" not in name else name
+            for name, unit in zip(header, units, strict=True)
+        ]
+        skip += 2
+        notes.append(
+            "the line under the header gives the columns' units ("
+            + ", ".join(f"{n} {u}" for n, u in zip(header, units, strict=True) if u)
+            + "): used"
+        )
+    elif not layout["has_header"]:
         if names is None:
             column_names = [f"column_{i}" for i in range(width)]
             notes.append(
@@ -238,16 +347,27 @@ def text_arrow_options(path: Path, source: str, skip_rows: int, names: list[str]
         else lambda row: "skip" if row.text == cut else "error",
     )
     convert = pa_csv.ConvertOptions(decimal_point=layout["decimal_point"])
-    return stream, read, parse, convert, notes
+    return stream, read, parse, convert, notes, layout["metadata"]
+
+
+def _line_at(path: Path, layout: dict, index: int) -> str:
+    """Line ``index`` (from 0) of the text file as ``layout`` reads it."""
+    with path.open("r", encoding=layout["encoding"], errors="replace", newline="") as handle:
+        for number, line in enumerate(handle):
+            if number == index:
+                return line.lstrip("\ufeff").rstrip("\r\n")
+    return ""
 
 
 def read_text_arrow(path: Path, source: str, skip_rows: int, names: list[str] | None):
     """The text table at ``path`` as a pyarrow Table, with its header names (or generated
-    ones) and the reader's notes."""
+    ones), the reader's notes and what its metadata lines state (``rate_hz``, ``unit``)."""
     import pyarrow as pa
     import pyarrow.csv as pa_csv
 
-    stream, read, parse, convert, notes = text_arrow_options(path, source, skip_rows, names)
+    stream, read, parse, convert, notes, metadata = text_arrow_options(
+        path, source, skip_rows, names
+    )
     try:
         table = pa_csv.read_csv(
             stream, read_options=read, parse_options=parse, convert_options=convert
@@ -265,7 +385,7 @@ def read_text_arrow(path: Path, source: str, skip_rows: int, names: list[str] | 
             fix="check that every line has the header's number of fields; with decimal "
             "commas, separate the fields with ';' or a tab",
         ) from None
-    return table, notes
+    return table, notes, metadata
 
 
 def text_cell_problem(values: np.ndarray) -> tuple[str, str] | None:

@@ -38,6 +38,7 @@ from ..inference._bands import allan_band, draw_subset, spectrum_band
 from ..inference._noise_posterior import NoisePosterior
 from ..models._terms import PARAMETERS, card_values, display_values, parameter_unit
 from ..recording._recording import Channel
+from ._noise import frequency_text
 
 DATASHEET_TOLERANCE = (0.8, 1.25)
 PAIR_POINTS = 800
@@ -354,6 +355,15 @@ def spectrum_figure(analysis: ChannelAnalysis) -> str:
     axes.plot(
         frequency, band["expected_median"], color="#a63603", lw=1.2, label="model, posterior median"
     )
+    found = analysis.result.get("bayesian", {}).get("spectral_lines", {}).get("lines", [])
+    for index, line in enumerate(found):
+        axes.axvline(
+            line["frequency"]["mean"],
+            color="#3182bd",
+            lw=0.8,
+            ls="--",
+            label="spectral lines (taken out of the record fitted)" if index == 0 else None,
+        )
     axes.set_xscale("log")
     axes.set_yscale("log")
     axes.set_xlabel("frequency [Hz]")
@@ -869,6 +879,41 @@ def _side_by_side_table(analysis: ChannelAnalysis) -> str:
     )
 
 
+def _lines_table(result: dict) -> str:
+    """The spectral lines of the channel: frequency, amplitude (or power and width) with
+    intervals, the test's ratio, aliased or not."""
+    block = result.get("bayesian", {}).get("spectral_lines")
+    if not block or not block["lines"]:
+        return ""
+    unit = result["unit"]
+    rows = []
+    for line in block["lines"]:
+        kind = (
+            f"broadened, {_q(line['width_hz'], 'Hz')} wide"
+            if line["kind"] == "broadened"
+            else "sinusoid"
+        )
+        if line["aliased"]:
+            kind += f"; aliased (the filter passes {_percent(line['filter_gain'])} there)"
+        rows.append(
+            f"<tr><td class='num'>{_esc(frequency_text(line['frequency']))}</td>"
+            f"<td class='num'>{_posterior(line['amplitude'], unit)}</td>"
+            f"<td class='num'>{_posterior(line['power'], line['power']['unit'])}</td>"
+            f"<td class='num'>{_num(line['ratio_to_floor'], 3)}</td><td>{_esc(kind)}</td></tr>"
+        )
+    test = block["test"]
+    return (
+        f"<h4>Spectral lines ({len(block['lines'])}): taken out of the record the noise model "
+        "was fitted to, so that N is the floor between them</h4><table><thead><tr>"
+        "<th>frequency</th><th>amplitude (peak): mean [5 %, 95 %]</th><th>power</th>"
+        "<th>× the floor</th><th>kind</th></tr></thead><tbody>"
+        + "".join(rows)
+        + f"</tbody></table><p class='note'>Found by {_esc(test['method'])}, family-wise "
+        f"{100 * test['family_wise_level']:g} % over {test['frequencies_searched']:,} "
+        f"frequencies; resolution {_q(test['resolution_hz'], 'Hz')}.</p>"
+    )
+
+
 def _datasheet_html(comparison: dict | None) -> str:
     if not comparison:
         return ""
@@ -940,6 +985,7 @@ def _channel_section(analysis: ChannelAnalysis, findings: dict | None) -> str:
         )
     parts.append(_t_interval_html(result))
     parts.append(_side_by_side_table(analysis))
+    parts.append(_lines_table(result))
     bayesian = result.get("bayesian")
     if bayesian:
         parts.append(

@@ -43,11 +43,19 @@ def _reading(parameter: str, reading: SlopeReading, unit: str) -> dict:
 
 def _t_interval_explanation(classical: ClassicalNoise) -> str:
     check = classical.t_interval
+    interval = f"interval {check.ratio_ci_low:.2f}-{check.ratio_ci_high:.2f}"
+    if check.valid and check.ratio_ci_high < 1.0:
+        return (
+            f"conservative: the Allan deviation at tau = {check.tau_s:g} s is "
+            f"{check.ratio:.2f}x the white-noise prediction ({interval} lies below 1): "
+            "neighbouring samples are anti-correlated at that scale (an output filter, "
+            "quantization), so the Student-t interval is wider than it need be"
+        )
     if check.valid:
         return (
             f"consistent with independent samples: the Allan deviation at tau = "
             f"{check.tau_s:g} s is {check.ratio:.2f}x the white-noise prediction "
-            f"(interval {check.ratio_ci_low:.2f}-{check.ratio_ci_high:.2f} includes 1)"
+            f"({interval} includes 1)"
         )
     return (
         f"samples are correlated: the Allan deviation at tau = {check.tau_s:g} s is "
@@ -248,6 +256,8 @@ def noise_result(
                 "(LSB^2/12 per sample) is a known white floor in the model, so N is the "
                 "sensor's white noise without it; the output's white level adds it back",
             }
+        if noise.lines is not None:
+            bayesian["spectral_lines"] = noise.lines.as_dict()
         bayesian["fit_checks"] = [
             {key: check[key] for key in ("name", "statistic", "p_value", "location", "passed")}
             | {"misfit": check["misfit"]}
@@ -323,6 +333,49 @@ def noise_text(result: dict) -> str:
     return "\n".join(lines)
 
 
+def frequency_text(frequency: dict) -> str:
+    """A line's frequency to the digits its standard error resolves (Hz): two lines the
+    record tells apart print apart."""
+    sd = frequency["sd"]
+    decimals = max(1, math.ceil(-math.log10(sd)) + 1) if sd > 0 else 6
+    return f"{frequency['mean']:.{decimals}f} ± {sd:.1g} Hz"
+
+
+def lines_text(block: dict | None, unit: str) -> list[str]:
+    """The rows of the spectral lines' table (``bayesian.spectral_lines`` of the document)."""
+    if not block:
+        return []
+    found = block["lines"]
+    test = block["test"]
+    head = (
+        f"  spectral lines: {len(found)} found (periodogram test, family-wise "
+        f"{100 * test['family_wise_level']:g} % over {test['frequencies_searched']:,} "
+        f"frequencies; resolution {test['resolution_hz']:.3g} Hz); N is the floor between them"
+    )
+    rows = [head] if found else [head.replace(": 0 found", ": none found")]
+    for line in found:
+        amplitude = line["amplitude"]
+        kind = (
+            f"broadened, {line['width_hz']:.3g} Hz wide, power {_number(line['power']['mean'])} "
+            f"{line['power']['unit']}"
+            if line["kind"] == "broadened"
+            else "sinusoid"
+        )
+        aliased = (
+            f"; aliased: the output filter passes {100 * line['filter_gain']:.2g} % of the power "
+            "there"
+            if line["aliased"]
+            else ""
+        )
+        rows.append(
+            f"    {frequency_text(line['frequency']):<28} amplitude "
+            f"{_number(amplitude['mean'])} [{_number(amplitude['q05'])}, "
+            f"{_number(amplitude['q95'])}] {unit}, {line['ratio_to_floor']:.3g}x the floor "
+            f"({kind}{aliased})"
+        )
+    return rows
+
+
 def _side_by_side(result: dict) -> list[str]:
     classical, bayesian = result["classical"], result["bayesian"]
     percent = f"{100 * classical['bias']['confidence']:g}%"
@@ -345,6 +398,7 @@ def _side_by_side(result: dict) -> list[str]:
             f"white floor {_number(rounding['white_floor'])} {rounding['density_unit']} kept "
             f"out of N (output's white level {_number(rounding['output_white_level'])})"
         )
+    lines += lines_text(bayesian.get("spectral_lines"), result["unit"])
     width = 2 + max(6, *(len(name) for name in bayesian["parameters"]))
     lines.append(f"  {'':{width}}{'unit':<16}{'classical':<38}{'Bayesian':<40}MAP")
     for name, entry in bayesian["parameters"].items():

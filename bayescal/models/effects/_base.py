@@ -167,6 +167,15 @@ class NoiseTerm(SlotTerm):
 
     The output filter's shapes shape the white noise instead (:attr:`filter_shape`,
     :meth:`gain`), and the ramp adds to the mean increment (:attr:`mean_rate`).
+
+    A term may instead be a deterministic part *found in the record* before the stochastic
+    terms are fitted (:attr:`found_in_record`, :meth:`find`: spectral lines at frequencies a
+    test locates). What it finds is taken out of the record (``removed``), bands it cannot
+    take out are left out of the likelihood (``excluded_bands_hz``), and the stochastic
+    terms' posterior, its checks and N are of what is left; its parameters, one set per item
+    found, are estimated there and never sampled (they hold no prior and no place in a
+    posterior's coordinates). The model (:class:`~bayescal.NoiseModel`) simulates it and
+    takes its Allan variance from them all the same.
     """
 
     aliases: ClassVar[tuple[str, ...]] = ()
@@ -194,11 +203,25 @@ class NoiseTerm(SlotTerm):
     """Its increments are correlated at every lag (flicker), not only at the first few."""
     filtered: ClassVar[bool] = False
     """Whether the output filter's low-pass shapes its components (the white noise's)."""
+    found_in_record: ClassVar[bool] = False
+    """Whether the term is a deterministic part found in the record before the stochastic
+    terms are fitted (:meth:`find`; the class docstring)."""
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
         if cls.__dict__.get("parameters"):
             cls.parameter = cls.parameters[0].name
+
+    @classmethod
+    def find(cls, values, rate_hz: float):
+        """What a term :attr:`found_in_record` finds in a record (NaN marks a missing
+        sample), before any fit: an object with ``found`` (whether there is anything),
+        ``removed(values)`` (the record without it), ``excluded_bands_hz`` (bands, Hz, the
+        stochastic fit leaves out), ``left_in`` (what stays in the record less it, as a noise
+        model's parameters, for the checks of the fit), ``verdict`` (what was found, in
+        words, for the term search's table) and ``log_bayes_factor`` (its evidence against
+        the record without it). None for the other terms."""
+        return None
 
     @classmethod
     def components(cls, context: Context) -> tuple:

@@ -50,6 +50,7 @@ _EXPORTS = {
     "FleetPopulation": "models._population",
     # inference
     "Sampler": "inference._sampler",
+    "FitCheck": "inference._checks",
     # capabilities
     "fit_noise": "capabilities._noise",
     "NoiseFit": "capabilities._noise",

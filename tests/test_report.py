@@ -37,70 +37,19 @@ def _recording(path):
     return path
 
 
-def _findings(channel="gyro_x", unit_scale=1.0):
-    """A hand-made discovery result: the issue-6 JSON contract plus the diagnostics blocks."""
-    rng = np.random.default_rng(3)
-    tau = np.geomspace(0.1, 200, 12)
-    adev = 0.02 / np.sqrt(tau) + 0.002 * tau / 200
-    frequency = np.geomspace(1e-3, 5, 300)
-    power = 4e-4 * (1 + 1e-4 / frequency**2) * rng.exponential(size=frequency.size)
-    time = np.arange(4000) / RATE_HZ
-    drift = 0.01 * (1 - np.exp(-time / 60))
-    return {
-        "channel": channel,
-        "baseline": ["bias", "white"],
-        "effects": [
-            {
-                "name": "thermal_bias",
-                "explanation": "The bias follows the die temperature as it warms up.",
-                "location": {"start_s": 0.0, "stop_s": 400.0, "covariate": "temperature"},
-                "evidence": {"correlation": 0.93, "p_value": 1e-6},
-                "delta_elpd": 812.4,
-                "delta_elpd_se": 40.2,
-                "parameters": {
-                    "c1": {"mean": 0.002, "q05": 0.0018, "q95": 0.0022, "unit": "deg/s/degC"}
-                },
-            }
-        ],
-        "final_terms": ["bias", "white", "thermal_bias"],
-        "checks": [
-            {
-                "name": "allan_deviation",
-                "statistic": 4.2,
-                "p_value": 0.001,
-                "location": {"tau_s": [50.0, 200.0]},
-                "passed_after": True,
-            },
-            {
-                "name": "residual_vs_temperature",
-                "statistic": 0.93,
-                "p_value": 1e-5,
-                "location": {"covariate": "temperature"},
-                "passed_after": True,
-            },
-        ],
-        "diagnostics": {
-            "allan": {
-                "tau_s": tau.tolist(),
-                "adev": (adev * unit_scale).tolist(),
-                "baseline_low": (0.8 * 0.02 / np.sqrt(tau)).tolist(),
-                "baseline_high": (1.2 * 0.02 / np.sqrt(tau)).tolist(),
-                "final_low": (0.8 * adev).tolist(),
-                "final_high": (1.2 * adev).tolist(),
-            },
-            "spectrum": {
-                "frequency_hz": frequency.tolist(),
-                "power": power.tolist(),
-                "baseline_model": np.full(frequency.size, 4e-4).tolist(),
-                "final_model": (4e-4 * (1 + 1e-4 / frequency**2)).tolist(),
-            },
-            "residual": {
-                "time_s": time.tolist(),
-                "baseline": (drift + 0.02 * rng.standard_normal(time.size)).tolist(),
-                "final": (0.02 * rng.standard_normal(time.size)).tolist(),
-            },
-        },
-    }
+def _findings(channel="gyro_x", *, thermal=True, samples=2**13):
+    """A real discovery on a simulated record named ``channel`` (10 Hz): with ``thermal``, a
+    bias that follows a warming die's temperature (0.004 deg/s/degC), found as
+    thermal_bias; without, white noise alone, where nothing is found."""
+    from bayescal.report._discovery import Findings
+
+    time = np.arange(samples) / RATE_HZ
+    temperature = 25 + 10 * (1 - np.exp(-time / 150)) if thermal else None
+    y = bc.NoiseModel(rate_hz=RATE_HZ, N=0.02).simulate(samples, seed=2 if thermal else 3)
+    if thermal:
+        y = y + 0.004 * temperature
+    found = bc.discover(y, RATE_HZ, temperature=temperature, unit="deg/s", channel=channel, seed=1)
+    return Findings.of(found, source="simulated")
 
 
 def _decoded_images(page: str) -> list[np.ndarray]:
@@ -159,6 +108,12 @@ def test_report_files_and_json(report):
         "m/s^2/sqrt(Hz)"
     )
     assert document["discoveries"]["gyro_x"]["effects"][0]["name"] == "thermal_bias"
+    assert set(document["discoveries"]["gyro_x"]["diagnostics"]) == {
+        "allan",
+        "spectrum",
+        "residual",
+        "temperature",
+    }
     for channel in ("gyro_x", "acc_z"):
         path = folder / f"bench_{channel}_posterior.nc"
         tree = xr.open_datatree(path, engine="h5netcdf")
@@ -185,14 +140,16 @@ def test_page_content_and_units(report):
         "Against the datasheet: MPU-6050",
         "Discovery: gyro_x",
         "thermal_bias",
-        "812.4 ± 40.2&nbsp;nats",
+        "&nbsp;nats",
         "deg/s/°C",
+        'id="discovery-gyro_x"',
     ):
         assert text in page, text
     assert "HEALTH CHECK FAILED" not in page
-    # 3 figures per channel, 3 before/after figures of the discovery.
+    # 3 figures per channel, and discovery's 4 (Allan and spectrum before and after, the
+    # residual over time and against the temperature).
     images = _decoded_images(page)
-    assert len(images) == 2 * 3 + 3
+    assert len(images) == 2 * 3 + 4
     for image in images:
         _assert_not_blank(image)
 
@@ -202,33 +159,51 @@ def test_posterior_bands_agree_with_the_data(report):
     spectrum's white level reads N."""
     outcome, _ = report
     for analysis in outcome.analyses:
-        band = analysis.bands["allan"]
-        allan = analysis.classical.allan
+        band = analysis.allan
+        allan = analysis.noise.classical.allan
         measured = np.asarray(allan.deviation)[np.isfinite(allan.deviation)]
-        inside = (band["predictive_low"] <= measured) & (measured <= band["predictive_high"])
+        inside = (band.predictive_low <= measured) & (measured <= band.predictive_high)
         assert inside.mean() >= 0.7, (analysis.channel, inside)
-        assert np.all(band["expected_low"] <= band["expected_high"])
-        spectrum = analysis.bands["spectrum"]
-        high = spectrum["frequency_hz"] > 1.0
+        assert np.all(band.expected_low <= band.expected_high)
+        spectrum = analysis.spectrum
+        high = spectrum.frequency_hz > 1.0
         n_mean = analysis.fit.parameters["N"].mean
-        assert np.median(spectrum["expected_median"][high]) == pytest.approx(n_mean, rel=0.05)
-        assert np.median(spectrum["measured_asd"][high]) == pytest.approx(n_mean, rel=0.1)
+        assert np.median(spectrum.expected_median[high]) == pytest.approx(n_mean, rel=0.05)
+        assert np.median(spectrum.measured_asd[high]) == pytest.approx(n_mean, rel=0.1)
 
 
-def test_discovery_section_alone():
+def test_discovery_section_alone(report):
+    """A channel's discovery: the effect found with its parameters and the checks it answers,
+    the figures before and after; where nothing was found, the baseline's figures alone."""
     from bayescal.report._html import discovery_section
 
-    section = discovery_section(_findings(), unit="deg/s")
+    outcome, _ = report
+    section = discovery_section(outcome.findings["gyro_x"])
     assert "thermal_bias" in section and "passes" in section and "deg/s/°C" in section
     images = _decoded_images(section)
-    assert len(images) == 3
+    assert len(images) == 4
     for image in images:
         _assert_not_blank(image)
-    # Every key may be missing; nothing found is said so.
-    empty = discovery_section({"channel": "gyro_y", "effects": [], "checks": []})
-    assert "No effect found" in empty and "<img" not in empty
-    partial = discovery_section({"diagnostics": {"allan": {"tau_s": [1.0, 2.0, 4.0]}}})
-    assert "<img" not in partial
+    empty = discovery_section(_findings("gyro_y", thermal=False, samples=2**12))
+    assert "No effect found" in empty and "still fails" not in empty
+    assert len(IMAGE.findall(empty)) == 3  # Allan, spectrum, residual: no temperature
+
+
+def test_no_figure_changes_matplotlib_state(report):
+    """Every figure is drawn on its own canvas: matplotlib's backend and pyplot's figures are
+    as the user left them (a notebook's inline backend stays)."""
+    import matplotlib
+
+    from bayescal.report._figures import discovery_allan_figure, png
+
+    outcome, _ = report
+    backend = matplotlib.get_backend()
+    findings = outcome.findings["gyro_x"]
+    figure = discovery_allan_figure("gyro_x", "deg/s", findings.curves.allan, True)
+    assert png(figure).startswith(b"\x89PNG")
+    assert matplotlib.get_backend() == backend
+    pyplot = __import__("sys").modules.get("matplotlib.pyplot")
+    assert pyplot is None or pyplot.get_fignums() == []
 
 
 def test_report_command_line(run_cli, bench_csv, tmp_path):
@@ -300,8 +275,8 @@ def test_demo_writes_the_page(run_cli, tmp_path):
     assert truth["hidden_effect"]["name"] == "thermal_bias"
     text = page.read_text()
     assert "Against the datasheet: MPU-6050" in text
-    # Three figures per channel, and discovery's three before/after figures per gyro.
-    assert len(IMAGE.findall(text)) == 6 * 3 + 3 * 3
+    # Three figures per channel, and discovery's four per gyro (with the temperature).
+    assert len(IMAGE.findall(text)) == 6 * 3 + 3 * 4
     document = json.loads((out / "demo_imu_report.json").read_text())
     acc_z = document["channels"]["acc_z"]["bayesian"]["parameters"]["bias"]
     assert acc_z["q05"] < 9.80665 + 0.09 < acc_z["q95"]

@@ -11,6 +11,7 @@ when its p-value is below ``CHECK_LEVEL``.
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import fft, stats
@@ -417,7 +418,58 @@ def _lag_one(sums: dict, autocovariance: np.ndarray) -> dict:
     }
 
 
-def noise_model_checker(summary, values, unit: str, allan=None) -> Callable[..., list[dict]]:
+@dataclass(frozen=True)
+class FitCheck:
+    """One check of a fitted noise model against its record (:func:`noise_model_checker`):
+    whether the record looks like a draw from the model there.
+
+    Attributes
+    ----------
+    name : str
+        The check: ``allan_deviation`` (the measured overlapping Allan deviation within the
+        model's band, the model's own EDF at each tau), ``spectrum_bands`` (the binned
+        periodogram in octave bands) or ``lag_one_autocorrelation`` (the increments').
+    statistic : float
+        Its statistic at the worst place (as the check defines it).
+    p_value : float
+        Its p-value, Bonferroni-corrected over the places it looked.
+    location : dict
+        Where it looked worst: a tau and the measured over the model's Allan deviation, a
+        frequency band and its power over the model's, the lag-1 autocorrelations.
+    passed : bool
+        Whether the model fits there: the departure is not both significant (p below
+        ``CHECK_LEVEL`` = 0.01) and material (beyond 10 % in Allan deviation, 20 % in a band's
+        power, 0.05 in the lag-1 autocorrelation).
+    misfit : str
+        Where and by how much the model misfits, in words (empty when it passed).
+    """
+
+    name: str
+    statistic: float
+    p_value: float
+    location: dict
+    passed: bool
+    misfit: str
+
+    def as_dict(self) -> dict:
+        """The check as the JSON documents hold it (``fit_checks``).
+
+        Returns
+        -------
+        dict
+            ``name``, ``statistic``, ``p_value``, ``location``, ``passed``, ``misfit``.
+        """
+        return {
+            "name": self.name,
+            "statistic": self.statistic,
+            "p_value": self.p_value,
+            "location": self.location,
+            "passed": self.passed,
+            "misfit": self.misfit,
+        }
+
+
+def noise_model_checker(summary, values, unit: str, allan=None) -> Callable[..., list[FitCheck]]:
     """model -> the checks of a stationary noise model (a :class:`~bayescal.NoiseModel`, at a
     posterior's MAP) against ``values``, its record (``summary`` their spectral summary,
     ``allan`` their Allan deviation at octave taus when already computed): the Allan deviation
@@ -437,7 +489,7 @@ def noise_model_checker(summary, values, unit: str, allan=None) -> Callable[...,
     count = finite_moments(values)[0]
     increments = _increment_sums(values)
 
-    def check(model) -> list[dict]:
+    def check(model) -> list[FitCheck]:
         weights = model.whittle_weights(summary)
         expected = np.asarray(expected_power(summary, *weights)) / summary.count
         checks = [
@@ -453,11 +505,21 @@ def noise_model_checker(summary, values, unit: str, allan=None) -> Callable[...,
             spectrum_check(summary, summary.power / expected, expected),
             _lag_one(increments, model.increment_autocovariance(np.arange(64))),
         ]
+        found = []
         for one in checks:
             material = _material(one)
-            one["passed"] = bool(one["p_value"] >= CHECK_LEVEL or not material)
-            one["misfit"] = "" if one["passed"] else material
-        return checks
+            passed = bool(one["p_value"] >= CHECK_LEVEL or not material)
+            found.append(
+                FitCheck(
+                    name=one["name"],
+                    statistic=one["statistic"],
+                    p_value=one["p_value"],
+                    location=one["location"],
+                    passed=passed,
+                    misfit="" if passed else material,
+                )
+            )
+        return found
 
     return check
 

@@ -65,6 +65,8 @@ _EXPORTS = {
     "Discovery": "capabilities._discovery",
     "FoundEffect": "capabilities._discovery",
     "CheckResult": "capabilities._discovery",
+    "plan_recording": "capabilities._plan",
+    "RecordingPlan": "capabilities._plan",
     "fit_fleet": "capabilities._fleet",
     "FleetFit": "capabilities._fleet",
 }

@@ -8,16 +8,29 @@ temporary file is private, a result is made to be shared).
 
 Inside :class:`Outputs` (every command of the command line runs in one), the temporaries wait
 until the whole run has succeeded and are then moved into place together; a run that fails or
-is interrupted removes them, and the folders it created, so that it leaves nothing behind. An
+is interrupted removes them, and the folders it created, so that it leaves nothing behind. A
+signal (Ctrl-C, SIGTERM) waits while files move into place or are removed, and while a
+temporary is made and recorded (:func:`signals_deferred`): none is cut in half. An
 output that is one of the run's inputs, or another of its outputs, is refused before any work.
+
+A write the machine refuses — a full disk, a quota, a read-only file system — is an
+:class:`~bayescal._errors.InputError` that names the file and what to do (exit 2), its
+temporary removed; where the content is known before it is written (JSON, a page, the
+posterior's netCDF) the free space is checked first. The netCDF file is made in memory and
+written by Python: HDF5 writing to a full disk fails inside its C library, and the process
+then died in HDF5's teardown (a segmentation fault) after the error.
 """
 
 import contextlib
 import contextvars
+import errno
+import io
 import json
 import math
 import os
 import re
+import shutil
+import signal
 import tempfile
 from pathlib import Path
 
@@ -101,6 +114,90 @@ def check_folder(path: str | os.PathLike, argument: str) -> Path:
     return folder
 
 
+_DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def signals_deferred():
+    """Hold SIGINT and SIGTERM while the block runs, then deliver them to the handlers in
+    place before (in the main thread; elsewhere the block just runs): a step that must not
+    be cut in half — files moving into place, a temporary made and recorded for removal —
+    finishes first, and a Ctrl-C then acts as it would have."""
+    held: list[int] = []
+    try:
+        before = {
+            signum: signal.signal(signum, lambda signum, frame: held.append(signum))
+            for signum in _DEFERRED_SIGNALS
+        }
+    except ValueError:  # not the main thread: signals are the main thread's to handle
+        yield
+        return
+    try:
+        yield
+    finally:
+        for signum, handler in before.items():
+            signal.signal(signum, handler)
+        for signum in dict.fromkeys(held):
+            signal.raise_signal(signum)
+
+
+# What an error of a write means to the user, and what to do about it.
+_WRITE_FAILURES = {
+    errno.ENOSPC: ("its file system is full", "free space there or choose another path"),
+    errno.EDQUOT: (
+        "the disk quota is used up",
+        "free space within the quota or choose another path",
+    ),
+    errno.EROFS: ("its file system is read-only", "choose another path"),
+    errno.EACCES: ("permission denied", "choose another path"),
+    errno.EPERM: ("permission denied", "choose another path"),
+    errno.EFBIG: ("too large for its file system", "choose another path"),
+}
+
+
+def write_error(path, error: OSError, fix: str | None = None) -> InputError:
+    """The :class:`InputError` for an ``OSError`` of a write to ``path``: which file, what
+    the machine said (a full disk, a quota, a read-only file system ...) and what to do
+    (``fix``, else the usual advice for that error)."""
+    problem, usual = _WRITE_FAILURES.get(
+        error.errno, (error.strerror or str(error), "check the path and its disk")
+    )
+    return InputError(f"not written: {problem}", source=str(path), fix=fix or usual)
+
+
+@contextlib.contextmanager
+def _writing(target: Path):
+    """An ``OSError`` in the block becomes :func:`write_error` for ``target``."""
+    try:
+        yield
+    except OSError as error:
+        raise write_error(target, error) from None
+
+
+def _size(count: float) -> str:
+    unit = "B"
+    for larger in ("kB", "MB", "GB", "TB"):
+        if count < 1000:
+            break
+        count, unit = count / 1000, larger
+    return f"{count:.3g} {unit}"
+
+
+def _check_room(target: Path, size: int) -> None:
+    """Refuse, before writing, ``size`` bytes that the file system of ``target`` has no
+    room for (the space an unprivileged user may fill; unknown: not checked)."""
+    try:
+        free = shutil.disk_usage(target.parent if str(target.parent) else ".").free
+    except OSError:
+        return
+    if size > free:
+        raise InputError(
+            f"not written: it needs {_size(size)} and its file system has {_size(free)} free",
+            source=str(target),
+            fix="free space there or choose another path",
+        )
+
+
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
@@ -177,8 +274,9 @@ class Outputs:
         folder = check_folder(path, argument)
         self._check_not_input(folder, argument)
         if not folder.exists():
-            folder.mkdir()
-            self._created.append(folder)
+            with signals_deferred(), _writing(folder):
+                folder.mkdir()
+                self._created.append(folder)
         return folder
 
     def stage(self, path) -> Path:
@@ -191,8 +289,9 @@ class Outputs:
                     fix="give each output its own path",
                 )
         self._check_not_input(target, "output")
-        temporary = _temporary_beside(target)
-        self._staged[target] = temporary
+        with signals_deferred(), _writing(target):
+            temporary = _temporary_beside(target)
+            self._staged[target] = temporary
         return temporary
 
     def temporary_of(self, path) -> Path | None:
@@ -212,15 +311,17 @@ class Outputs:
 
         target = Path(path)
         lock_path = target.with_name(f".{target.name}.lock")
-        handle = open(lock_path, "a")  # noqa: SIM115 (held until the run ends)
+        with _writing(lock_path):
+            handle = open(lock_path, "a")  # noqa: SIM115 (held until the run ends)
         fcntl.flock(handle, fcntl.LOCK_EX)
         self._locks.append(handle)
 
     def commit(self) -> None:
         mode = 0o666 & ~_umask()
         for target, temporary in self._staged.items():
-            os.chmod(temporary, mode)
-            os.replace(temporary, target)
+            with _writing(target):
+                os.chmod(temporary, mode)
+                os.replace(temporary, target)
         self._staged.clear()
         self._created.clear()
         self._release()
@@ -246,14 +347,16 @@ class Outputs:
 
     def __exit__(self, kind, error, traceback) -> None:
         _ACTIVE.reset(self._token)
-        if kind is None:
-            try:
-                self.commit()
-            except BaseException:
+        # All the files move, or all are removed, before a signal acts.
+        with signals_deferred():
+            if kind is None:
+                try:
+                    self.commit()
+                except BaseException:
+                    self.discard()
+                    raise
+            else:
                 self.discard()
-                raise
-        else:
-            self.discard()
 
 
 def staged(path: str | os.PathLike) -> Path:
@@ -268,31 +371,45 @@ def staged(path: str | os.PathLike) -> Path:
 def atomic_path(path: str | os.PathLike):
     """A temporary path beside ``path`` to write to. Outside :class:`Outputs` it replaces
     ``path`` when the block ends without an error; inside, it waits for the run to succeed.
-    Either way it is removed when the block (or the run) fails."""
+    Either way it is removed when the block (or the run) fails, and an ``OSError`` of the
+    block (a full disk ...) becomes an :class:`InputError` naming ``path``
+    (:func:`write_error`)."""
     target = Path(path)
     outputs = Outputs.active()
     if outputs is not None:
         temporary = outputs.stage(target)
         try:
-            yield temporary
+            with _writing(target):
+                yield temporary
         except BaseException:
             outputs.unstage(target)
             raise
         return
-    temporary = _temporary_beside(target)
+    temporary = None
     try:
-        yield temporary
-        os.chmod(temporary, 0o666 & ~_umask())
-        os.replace(temporary, target)
+        with signals_deferred(), _writing(target):
+            temporary = _temporary_beside(target)
+        with _writing(target):
+            yield temporary
+            os.chmod(temporary, 0o666 & ~_umask())
+            os.replace(temporary, target)
     except BaseException:
-        temporary.unlink(missing_ok=True)
+        if temporary is not None:
+            temporary.unlink(missing_ok=True)
         raise
+
+
+def write_bytes(path: str | os.PathLike, content: bytes) -> None:
+    """Write ``content`` to ``path`` so that a failure leaves no partial file, after checking
+    that its file system has room for it."""
+    with atomic_path(path) as temporary:
+        _check_room(Path(path), len(content))
+        temporary.write_bytes(content)
 
 
 def write_atomic(path: str | os.PathLike, text: str) -> None:
     """Write ``text`` to ``path`` so that a failure leaves no partial file."""
-    with atomic_path(path) as temporary:
-        temporary.write_text(text, encoding="utf-8")
+    write_bytes(path, text.encode("utf-8"))
 
 
 def write_json(path: str | os.PathLike, result: dict) -> None:
@@ -301,9 +418,13 @@ def write_json(path: str | os.PathLike, result: dict) -> None:
 
 
 def write_netcdf(tree, path: str | os.PathLike) -> None:
-    """Write an ArviZ DataTree as netCDF (h5netcdf), atomically."""
-    with atomic_path(path) as temporary:
-        tree.to_netcdf(temporary, engine="h5netcdf")
+    """Write an ArviZ DataTree as netCDF (h5netcdf), atomically: HDF5 makes the file in
+    memory and Python writes it (HDF5's own write to a full disk crashed the process)."""
+    image = io.BytesIO()
+    tree.to_netcdf(image, engine="h5netcdf")
+    # getvalue, not getbuffer: Python 3.12.1 crashes collecting a BytesIO whose buffer view
+    # is in a reference cycle (the traceback of a failed write makes one).
+    write_bytes(path, image.getvalue())
 
 
 def write_csv(path: str | os.PathLike, columns) -> None:

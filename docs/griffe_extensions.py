@@ -7,7 +7,13 @@ parameters and every documented parameter is reported as absent from the signatu
 
 ``SphinxRoles``: the docstrings name other objects with Sphinx roles (``:func:`~x.y```), which
 Markdown would print as they are; they are shown as code, the short name where ``~`` asks
-for it."""
+for it.
+
+``SignatureDefaults``: every parameter's default on the page is the signature's. Griffe's numpy
+parser gives the parameters of one entry (``start, stop : float``) the first one's default, so
+the page once showed ``gaps`` of ``fit_fleet`` as None (it is "error"); the defaults are taken
+from the signature, after the parse, so that a docstring cannot make them wrong
+(``tests/test_docs.py`` reads them back off the built page)."""
 
 import re
 
@@ -15,6 +21,7 @@ from griffe import (
     Attribute,
     Class,
     Docstring,
+    DocstringSectionParameters,
     Expr,
     ExprCall,
     ExprKeyword,
@@ -94,3 +101,30 @@ class SphinxRoles(Extension):
         docstring: Docstring | None = obj.docstring
         if docstring is not None and ":`" in docstring.value:
             docstring.value = _ROLE.sub(_as_code, docstring.value)
+
+
+def _defaults_from_signature(sections: list, parent) -> list:
+    """``sections`` with each documented parameter's default set to the signature's."""
+    try:
+        signature = parent.parameters
+    except AttributeError:  # an object without parameters
+        return sections
+    for section in sections:
+        if isinstance(section, DocstringSectionParameters):
+            for parameter in section.value:
+                if parameter.name in signature:
+                    parameter.value = signature[parameter.name].default
+    return sections
+
+
+class SignatureDefaults(Extension):
+    def on_instance(self, *, obj: Object, **kwargs) -> None:
+        docstring: Docstring | None = obj.docstring
+        if docstring is None or not isinstance(obj, (Function, Class)):
+            return
+        parse = docstring.parse
+
+        def parse_with_signature_defaults(*args, **options):
+            return _defaults_from_signature(parse(*args, **options), docstring.parent)
+
+        docstring.parse = parse_with_signature_defaults

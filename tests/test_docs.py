@@ -68,6 +68,9 @@ def test_api_page_documents_every_public_name(site, tmp_path):
     for heading in ("Parameters:", "Returns:", "Raises:", "Examples:"):
         assert heading in dom, heading
     assert "----------" not in dom
+    # In this test, not one of its own: each xdist worker that runs a test of this module
+    # builds the site (minutes).
+    _check_documented_defaults(site)
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda path: path.name)
@@ -82,3 +85,69 @@ def test_study_page_shows_its_figures(site, path, request, tmp_path):
     assert decoded == total and total >= figures, f"{decoded} of {total} images decoded"
     assert "Not executed" not in dom
     assert 'class="jp-OutputArea' in dom or 'class="output_area' in dom
+
+
+_HEADING = re.compile(r'<h\d id="(bayescal\.[\w.]+)" class="doc doc-heading"')
+_ROW = re.compile(
+    r'<tr class="doc-section-item">\s*<td>\s*<code>([^<]+)</code>\s*</td>.*?</td>\s*<td>.*?'
+    r"</td>\s*<td>\s*(.*?)\s*</td>\s*</tr>",
+    re.S,
+)
+
+
+def _documented_object(path: str):
+    """(module, object) of a dotted path on the API page (a module, then attributes)."""
+    import importlib
+
+    parts = path.split(".")
+    for cut in range(len(parts), 0, -1):
+        try:
+            module = importlib.import_module(".".join(parts[:cut]))
+        except ImportError:
+            continue
+        found = module
+        for part in parts[cut:]:
+            found = getattr(found, part)
+        return module, found
+    raise LookupError(path)
+
+
+def _check_documented_defaults(site):
+    """The Default column of every Parameters table on the API page, evaluated where the object
+    lives, equals the default of its signature ("required" where there is none): the page
+    reads them from the signatures (docs/griffe_extensions.py, SignatureDefaults), so a
+    docstring cannot make them stale (a fit_fleet page once showed gaps=None, its default
+    "error", and 31 other rows documented in pairs wrongly)."""
+    import html
+    import inspect
+
+    page = (site / "api" / "index.html").read_text()
+    headings = [(match.start(), match.group(1)) for match in _HEADING.finditer(page)]
+    wrong, checked = [], 0
+    for index, (start, path) in enumerate(headings):
+        end = headings[index + 1][0] if index + 1 < len(headings) else len(page)
+        section = page[start:end]
+        at = section.find("Parameters:")
+        if at < 0:
+            continue
+        table = section[at : section.find("</table>", at)]
+        module, documented = _documented_object(path)
+        target = documented.__init__ if inspect.isclass(documented) else documented
+        try:
+            parameters = inspect.signature(target).parameters
+        except (TypeError, ValueError):
+            continue
+        for names, cell in _ROW.findall(table):
+            shown = html.unescape(re.sub(r"<[^>]+>", "", cell)).strip()
+            for name in (n.strip() for n in names.split(",")):
+                if name.startswith("*") or name not in parameters:
+                    continue
+                checked += 1
+                default = parameters[name].default
+                if default is inspect.Parameter.empty:
+                    if shown != "required":
+                        wrong.append(f"{path}({name}): page {shown!r}, required")
+                elif shown == "required" or eval(shown, vars(module)) != default:
+                    wrong.append(f"{path}({name}): page {shown!r}, signature {default!r}")
+    assert checked > 200, checked
+    assert not wrong, wrong

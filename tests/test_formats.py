@@ -764,3 +764,43 @@ def test_spreadsheet_and_logger_quirks(run_cli, tmp_path, plain):
     hours = write_csv(tmp_path / "hours.csv", {"time[h]": time / 3600, "gyro_x": gyro})
     found, _ = _result(run_cli, hours, tmp_path)
     assert found["rate_hz"] == RATE and found["classical"] == expected["classical"]
+
+
+def test_parquet_lists_of_numbers_read_as_one_column_per_element(run_cli, tmp_path, plain):
+    """A Parquet column holding a vector per row (the three axes of a gyro, as some tools
+    store them) reads as GYRO_0, GYRO_1, ... with the header's unit, like the channels of an
+    array; lists of varying length and structs are refused with what to do, and the other
+    columns of the file still read."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    time, gyro = plain["time"], plain["gyro"]
+    expected, _ = _result(run_cli, plain["csv"], tmp_path)
+    axes = [[-g, g, 2 * g] for g in gyro]
+    path = tmp_path / "vectors.parquet"
+    pq.write_table(
+        pa.table(
+            {
+                "time": time,
+                "gyro[deg/s]": axes,
+                "fixed": pa.array(axes, type=pa.list_(pa.float64(), 3)),
+                "ragged": [[1.0] * (1 + k % 2) for k in range(time.size)],
+                "pose": [{"x": 1.0, "y": 2.0}] * time.size,
+            }
+        ),
+        path,
+    )
+    found, _ = _noise_json(run_cli, path, tmp_path, "--channel", "gyro_1")
+    assert found["unit"] == "deg/s"
+    assert _without_source(found)["classical"] == expected["classical"]
+    recording = bc.load_recording(path)
+    assert np.array_equal(recording.columns["fixed_2"], 2 * gyro)
+    for channel, fragments in [
+        ("gyro", ["a list of 3 numbers per row", "gyro_0, gyro_1, gyro_2", "choose one of them"]),
+        ("ragged", ["lists of 1 to 2 numbers per row", "its own column"]),
+        ("pose", ["struct<x: double, y: double>", "column of numbers"]),
+    ]:
+        code, stdout, stderr = run_cli("noise", path, "--channel", channel, "--classical-only")
+        assert code == 2 and stdout == "" and "\n" not in stderr.strip(), stderr
+        for fragment in fragments:
+            assert fragment in stderr, stderr

@@ -183,6 +183,22 @@ def test_a_streamed_channel_is_the_in_memory_channel(small_blocks, tmp_path, suf
         assert np.array_equal(disk.values.read(0, disk.values.size), memory.values, equal_nan=True)
 
 
+def test_a_streamed_element_of_a_parquet_list_is_the_in_memory_one(small_blocks, tmp_path):
+    """A column of vectors (one list of three axes a row) streams element by element."""
+    path = tmp_path / "vectors.parquet"
+    values = gyro(30_000, seed=5)
+    axes = pa.FixedSizeListArray.from_arrays(
+        np.column_stack([values, -values, 2 * values]).ravel(), 3
+    )
+    time = np.arange(values.size) / RATE
+    pq.write_table(pa.table({"time": time, "gyro[deg/s]": axes}), path, row_group_size=5_000)
+    memory = bc.load_recording(path).channel("gyro_1")
+    disk = stream_channel(path, "gyro_1")
+    assert disk.unit == memory.unit == "deg/s" and disk.rate_hz == memory.rate_hz == RATE
+    assert np.array_equal(disk.values.read(0, disk.values.size), memory.values)
+    assert np.array_equal(memory.values, -values)
+
+
 def test_each_sample_takes_its_place_on_the_grid_whatever_the_stamps(tmp_path):
     """Evenly spaced stamps (the loader's shortcut: no grid search, the mean step as the
     period), stamps with 0.1 % jitter and stamps with a dropped sample give the same grid and

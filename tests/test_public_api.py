@@ -87,3 +87,34 @@ def test_a_thermal_calibration_leaves_an_output_flat_in_temperature(tmp_path):
     np.testing.assert_allclose(again.bias(temperature)[0], calibration.bias(temperature)[0])
     with pytest.raises(bc.InputError, match="rad/s"):
         bc.load_thermal_calibration(saved, unit="rad/s")
+
+
+def test_jax_runs_in_64_bit_mode_and_says_so():
+    """Using bayescal turns on JAX's 64-bit mode for the process (documented in Getting
+    started); with it turned off its computations refuse to run rather than compute in
+    float32, and an environment asking for float32 is overridden with a warning."""
+    import os
+    import subprocess
+    import sys
+
+    assert bc.NoiseModel(rate_hz=RATE, N=0.01).simulate(8, seed=1).dtype == np.float64
+    assert jax.config.jax_enable_x64
+    y = bc.NoiseModel(rate_hz=RATE, N=0.01).simulate(4096, seed=2)
+    with jax.enable_x64(False):
+        with pytest.raises(bc.InputError, match="64-bit mode is off"):
+            bc.NoiseModel(rate_hz=RATE, N=0.01).simulate(8, seed=1)
+        with pytest.raises(bc.InputError, match=r"with jax\.enable_x64\(False\)"):
+            bc.fit_noise(y, RATE, terms=("white",))
+    environment = {**os.environ, "JAX_ENABLE_X64": "0", "JAX_PLATFORMS": "cpu"}
+    done = subprocess.run(
+        [sys.executable, "-W", "error::UserWarning", "-c",
+         "import bayescal as bc; bc.NoiseModel(rate_hz=100.0, N=0.01)"],
+        capture_output=True, text=True, env=environment, check=False,
+    )  # fmt: skip
+    assert done.returncode != 0 and "JAX_ENABLE_X64=0 is overridden" in done.stderr
+    done = subprocess.run(
+        [sys.executable, "-c",
+         "import bayescal as bc; print(bc.NoiseModel(rate_hz=100.0, N=0.01).simulate(4).dtype)"],
+        capture_output=True, text=True, env=environment, check=False,
+    )  # fmt: skip
+    assert done.stdout.strip() == "float64", done.stderr

@@ -118,3 +118,15 @@ def test_the_gauss_markov_term_recovers_its_truth():
         assert summary["q05"] < true < summary["q95"], (name, summary)
     assert fit.summary["gm_sigma"]["unit"] == "deg/s"
     assert fit.summary["gm_tau"]["unit"] == "s"
+
+
+def test_the_command_line_lists_the_registry(run_cli):
+    """`bayescal terms` lists every registered term with its other names and each
+    parameter's unit for the channel's unit it is given."""
+    code, out, _ = run_cli("terms", "--unit", "m/s^2")
+    assert code == 0
+    for term in NOISE_TERMS:
+        assert term.name in out
+        for parameter in term.parameters:
+            assert f"{parameter.name} " in out
+    assert "m/s^2/sqrt(Hz)" in out and "rrw" in out

@@ -224,6 +224,27 @@ def test_bad_input(run_cli, calibration, tmp_path):
     assert code == 0 and "outside the calibrated range" in stderr and "by up to" in stderr
 
 
+def test_a_record_of_40_rows(run_cli, tmp_path):
+    """Too short to choose a degree by its predictive score: refused with the degrees it
+    can take; with one given, fitted (its classical bins hold three samples or more, 40 over
+    20 degC, where bins of 0.25 degC would hold none)."""
+    rng = np.random.default_rng(2)
+    temperature = np.linspace(20, 40, 40)
+    values = TRUTH[0] + TRUTH[1] * (temperature - 35) + 0.01 * rng.standard_normal(40)
+    path = write_recording(tmp_path / "short.csv", values, temperature)
+    out = tmp_path / "cal.json"
+    code, stdout, stderr = run_cli("thermal", "fit", path, "--channel", "gyro_z", "--json", out)
+    assert code == 2 and stdout == "" and "\n" not in stderr.strip(), stderr
+    assert "--degree auto: 40 samples make 5 block(s)" in stderr
+    assert "give --degree 0..2, or record longer" in stderr
+    assert not out.exists()
+    code, _, stderr = run_cli(
+        "thermal", "fit", path, "--channel", "gyro_z", "--degree", "1", "--json", out, "--quiet"
+    )
+    assert code in (0, 1), stderr
+    assert len(json.loads(out.read_text())["classical"]["bins"]) >= 2
+
+
 def test_learned_drift_given_its_scale_is_the_fixed_drift():
     """drift="auto" at a given s is the prior calibration with s^2 / h^(2j) added to the
     variance of c_j (h = 10: the range 25-45 about T0 = 35), its normalisation included."""

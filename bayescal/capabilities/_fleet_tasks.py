@@ -9,9 +9,12 @@ too. The workers read the recordings themselves, so a remote cluster needs the m
 files at the same paths (a shared file system) and the same bayescal (checked before any task
 is sent)."""
 
+import contextlib
 import os
 import pickle
+import signal
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 from importlib.metadata import version
@@ -173,6 +176,20 @@ def worker_version() -> str:
     return version("bayescal")
 
 
+@contextlib.contextmanager
+def _sigint_ignored():
+    """SIGINT ignored while the block runs (in the main thread; elsewhere left as it is)."""
+    try:
+        before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
 def client_of(scheduler, workers: int | None):
     """A Dask client: on a new LocalCluster (scheduler None), an existing cluster (an
     address), or the client given. Returns it, whether to close it, and how it is called."""
@@ -183,7 +200,11 @@ def client_of(scheduler, workers: int | None):
 
     if scheduler is None:
         count = workers or os.cpu_count() or 1
-        with warnings.catch_warnings():
+        # The worker processes ignore SIGINT: Ctrl-C at a terminal reaches every process of
+        # its group, and this one alone answers it, closing the cluster (workers of their own
+        # printed tracebacks). A process inherits an ignored signal only from an ignoring
+        # parent, so this one ignores it while they start.
+        with _sigint_ignored(), warnings.catch_warnings():
             # The scheduler's HTTP endpoint moving off a busy port is no news to a user.
             warnings.filterwarnings("ignore", "Port .* is already in use")
             cluster = LocalCluster(
@@ -193,7 +214,11 @@ def client_of(scheduler, workers: int | None):
                 dashboard_address=None,
                 silence_logs=logging.ERROR,
             )
-        return Client(cluster), cluster, "local"
+        try:
+            return Client(cluster), cluster, "local"
+        except BaseException:  # an interruption too: the caller has no cluster to close
+            cluster.close()
+            raise
     if workers is not None:
         raise InputError(
             "workers= sets the size of a local cluster; with scheduler= the cluster's own "
@@ -210,6 +235,21 @@ def client_of(scheduler, workers: int | None):
             fix="give the address of a running Dask scheduler, e.g. tcp://host:8786",
         ) from None
     return client, None, "remote"
+
+
+def _quiet_workers(client) -> None:
+    """Silence a local cluster's workers before it closes under them mid-task (an error, an
+    interruption): each would log the scheduler's going away as an error with its traceback,
+    on this process's terminal. At most 2 s; a worker that does not answer is closed as is."""
+    import logging
+
+    def silence():
+        with contextlib.suppress(Exception):
+            client.run(logging.disable, logging.CRITICAL)
+
+    thread = threading.Thread(target=silence, daemon=True)
+    thread.start()
+    thread.join(2.0)
 
 
 def check_workers(client, address: str) -> int:
@@ -288,6 +328,10 @@ def run_on_cluster(tasks, scheduler, workers: int | None, progress: bool):
         worker_count = check_workers(client, address)
         results, sizes = run_tasks(client, tasks, progress)
         worker_count = max(worker_count, len(client.nthreads()))
+    except BaseException:
+        if kind == "local":
+            _quiet_workers(client)
+        raise
     finally:
         if kind != "client":
             client.close()

@@ -21,7 +21,8 @@ def classical_thermal(
     present = ~np.isnan(values) & ~np.isnan(temperature)
     values, temperature = values[present], temperature[present]
     span = np.ptp(temperature)
-    count = int(min(20, max(degree + 2, round(span / 0.25))))
+    # Bins of 0.25 degrees, at most 20, and no more than the samples fill three at a time.
+    count = int(max(1, min(20, max(degree + 2, round(span / 0.25)), values.size // 3)))
     edges = np.linspace(temperature.min(), temperature.max(), count + 1)
     index = np.clip(np.digitize(temperature, edges) - 1, 0, count - 1)
     bins = []
@@ -45,9 +46,9 @@ def classical_thermal(
     bins = np.array(bins)
     if bins.shape[0] < degree + 1:
         raise InputError(
-            f"the temperature range ({span:.3g}) fills only {bins.shape[0]} bins, "
-            f"too few for degree {degree}",
-            fix="lower degree=",
+            f"{values.size} samples fill {bins.shape[0]} temperature bin(s) of 3 samples or "
+            f"more, too few for degree {degree}",
+            fix="lower degree=" if degree > 0 else "record more samples",
         )
     z = stats.norm.ppf(0.5 + confidence / 2)
     weight = 1 / (bins[:, 2] / z) ** 2

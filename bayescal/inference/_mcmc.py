@@ -20,6 +20,8 @@ import jax
 import numpy as np
 from arviz_stats.base import array_stats
 
+from .._x64 import require_x64  # float64 before any JAX array
+
 MAX_RHAT = 1.01
 MIN_ESS = 400
 ACCEPTANCE_RANGE = (0.1, 0.8)
@@ -66,6 +68,7 @@ def batch_log_density(log_density, model):
     same structure and shapes, and a plain list of arrays costs about half as much to pass on
     each of the sampler's thousands of calls as the module through ``eqx.filter_jit``.
     """
+    require_x64()
     leaves, treedef = jax.tree_util.tree_flatten(model)
     return lambda theta: np.asarray(_walker_log_densities(log_density, treedef, leaves, theta))
 
@@ -100,6 +103,10 @@ def sample_ensemble(
     sampler = emcee.EnsembleSampler(
         n_walkers, dimension, log_posterior_batch, vectorize=True, moves=emcee.moves.DEMove()
     )
+    # emcee wraps the log density to print a traceback of any exception it raises before
+    # passing it on: an interruption (Ctrl-C, the command line's SIGTERM) is to end the run
+    # quietly. With no extra arguments the wrapper adds nothing else, so it is left out.
+    sampler.log_prob_fn = log_posterior_batch
     sampler.random_state = np.random.RandomState(rng.integers(2**31)).get_state()
     spread = np.linalg.cholesky(covariance + 1e-12 * np.eye(dimension))
     state = start + rng.standard_normal((n_walkers, dimension)) @ spread.T

@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from .._x64 import require_x64  # float64 before any JAX array
 from ._traced import persistent_jit
 
 RTOL = ATOL = 1e-9
@@ -65,6 +65,7 @@ def maximum_a_posteriori(
     the model's class): it keys the compilation cache, so every model of the same structure
     reuses one compiled optimiser.
     """
+    require_x64()
     starts = (starts,) if not isinstance(starts, (tuple, list)) else tuple(starts)
     best, hessian, converged = _minimise(log_density, model, tuple(jnp.asarray(s) for s in starts))
     return Mode(np.asarray(best), np.asarray(hessian), bool(converged))

@@ -13,6 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from .._errors import InputError
 from ..models._noise_problem import NoisePrior
 from ..models._terms import PARAMETERS, term_parameters
 from ..models._thermal import (
@@ -148,6 +149,8 @@ def choose_degree(
     spectral = record_spectrum(record, noise_prior.terms)
     problems = {}
     for degree in range(MAX_DEGREE + 1):
+        if blocks < degree + 3:  # too few blocks for this degree's problem
+            break
         problem = thermal_problem(
             record, degree, reference, noise_prior=noise_prior, spectral=spectral
         )
@@ -159,6 +162,13 @@ def choose_degree(
         math.ceil(0.1 * blocks),
         *(_identified_from(problem.design) for problem in problems.values()),
     )
+    if not problems or blocks <= skip:
+        highest = min(MAX_DEGREE, blocks - 3)  # thermal_problem's blocks for a degree
+        raise InputError(
+            f"degree='auto': {record.values.size} samples make {blocks} block(s), and "
+            f"choosing a degree scores each block after the first {skip} by those before it",
+            fix=f"give degree=0..{highest}, or record longer" if highest >= 0 else "record longer",
+        )
     scores = {}
     for degree, problem in problems.items():
         mode = maximum_a_posteriori(ThermalProblem.log_posterior, problem, problem.location)

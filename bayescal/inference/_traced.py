@@ -130,11 +130,14 @@ def _export_and_store(fun, treedef, static, leaves, path: Path):
         return fun(*eqx.combine(jax.tree_util.tree_unflatten(treedef, arrays), static))
 
     exported = jax.export.export(jax.jit(flat))(*leaves)
+    partial = path.with_suffix(f".{os.getpid()}.partial")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_suffix(f".{os.getpid()}.partial")
         partial.write_bytes(exported.serialize())
         partial.replace(path)  # atomic: a concurrent run reads the whole file or none
     except OSError:
-        pass
+        partial.unlink(missing_ok=True)
+    except BaseException:  # interrupted: no partial entry is left in the cache
+        partial.unlink(missing_ok=True)
+        raise
     return exported

@@ -34,7 +34,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.scipy.stats import norm
 
-from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from .._x64 import require_x64  # float64 before any JAX array
 from ._components import Components
 from ._level import bias_given_noise, level_summary
 from ._terms import NOISE_TERMS, PARAMETERS
@@ -365,7 +365,13 @@ class NoiseModel(eqx.Module):
         -------
         numpy.ndarray
             The samples, each the average rate over its period, starting at t = 0.
+
+        Raises
+        ------
+        InputError
+            JAX's 64-bit mode was turned off (bayescal turns it on for the process).
         """
+        require_x64()
         key = jax.random.PRNGKey(seed) if isinstance(seed, (int, np.integer)) else seed
         return np.asarray(self.sample(key, n))
 

@@ -107,30 +107,99 @@ def _numbers(column, name: str) -> tuple[np.ndarray | None, str | None]:
     return None, None
 
 
+def _nested(column) -> list[np.ndarray] | tuple[str, str]:
+    """A Parquet column of lists as one float column per element (every row the same number
+    of numbers, an empty cell a missing sample in each), or why a column of lists, structs
+    or maps cannot be read (problem, fix): a vector per row is how a tool may store the
+    three axes of a sensor."""
+    import pyarrow.compute as pc
+    import pyarrow.types as pa_types
+
+    kind = column.type
+    if not (
+        pa_types.is_list(kind) or pa_types.is_large_list(kind) or pa_types.is_fixed_size_list(kind)
+    ):
+        return (f"holds {kind} values, not numbers", "save each channel as a column of numbers")
+    element = kind.value_type
+    if not (pa_types.is_integer(element) or pa_types.is_floating(element)):
+        return (
+            f"holds lists of {element}, not of numbers",
+            "save each channel as a column of numbers",
+        )
+    lengths = pc.unique(pc.drop_null(pc.list_value_length(column))).to_pylist()
+    if len(lengths) != 1 or lengths[0] == 0:
+        described = f"of {min(lengths)} to {max(lengths)} numbers" if lengths else "with no numbers"
+        return (
+            f"holds lists {described} per row, not one number per row",
+            "save each element of the list as its own column, of the same length in every row",
+        )
+    return [_floats(pc.list_element(column, index)) for index in range(lengths[0])]
+
+
+def _as_text(column) -> np.ndarray:
+    """A column's cells as text (None where empty), whatever its type."""
+    import pyarrow as pa
+
+    try:
+        return np.asarray(column.cast(pa.string()).to_pylist(), dtype=object)
+    except (pa.ArrowNotImplementedError, pa.ArrowInvalid):  # lists, structs, bytes ...
+        return np.asarray(
+            [None if cell is None else str(cell) for cell in column.to_pylist()], dtype=object
+        )
+
+
 def _arrow_columns(table, notes: list[str]) -> dict:
     """Columns of a pyarrow Table: numbers as float, dates and times as seconds from their
-    first stamp, the rest as text (a mostly numeric column with a text cell remembered)."""
-    import pyarrow as pa
+    first stamp, lists of numbers as one column per element (``NAME_0``, ``NAME_1``, ... as
+    the channels of an array are named), the rest as text (a mostly numeric column with a
+    text cell remembered)."""
     import pyarrow.types as pa_types
 
     from ._text import text_cell_problem
 
     headers = [str(name) for name in table.column_names]
     names, units = split_header(headers)
-    unusable = _duplicates(names)
+    nested = {
+        name: _nested(column)
+        for name, column in zip(names, table.columns, strict=True)
+        if pa_types.is_nested(column.type)
+    }
+    expanded = {
+        name: [f"{name}_{index}" for index in range(len(found))]
+        for name, found in nested.items()
+        if isinstance(found, list)
+    }
+    unusable = _duplicates([item for name in names for item in expanded.get(name, [name])])
     columns: dict[str, np.ndarray] = {}
     other: list[str] = []
     file_columns: list[tuple[str, np.ndarray]] = []
     for header, name, column in zip(headers, names, table.columns, strict=True):
         if pa_types.is_null(column.type) and not name:
             continue  # the empty column a trailing comma on every line makes
-        values, note = _numbers(column, name)
+        if name in expanded:
+            unusable.setdefault(
+                name,
+                (
+                    f"holds a list of {len(expanded[name])} numbers per row, read as the "
+                    f"columns {', '.join(expanded[name])}",
+                    "choose one of them",
+                ),
+            )
+            for element, values in zip(expanded[name], nested[name], strict=True):
+                if name in units:
+                    units[element] = units[name]
+                unit = f"[{units[name]}]" if name in units else ""
+                file_columns.append((element + unit, values))
+                if element not in unusable:
+                    columns[element] = values
+            continue
+        values, note = (None, None) if name in nested else _numbers(column, name)
         if values is None or note:
-            cells = np.asarray(column.cast(pa.string()).to_pylist(), dtype=object)
+            cells = _as_text(column)
             file_columns.append((header, cells))  # text, and dates as the file writes them
         if values is None:
             other.append(name)
-            problem = text_cell_problem(cells)
+            problem = nested.get(name) or text_cell_problem(cells)
             if problem is not None and name not in unusable:
                 unusable[name] = problem
             continue

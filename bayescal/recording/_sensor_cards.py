@@ -1,6 +1,7 @@
 """Sensor cards: datasheet noise figures of common IMU parts, read from TOML.
 
-A card is a TOML file in ``models/`` (or in the folder named by ``BAYESCAL_MODELS``) with a
+A card is a TOML file in the repository's ``models/`` folder, which a wheel installs as the
+package data ``bayescal/_cards`` (or in the folder named by ``BAYESCAL_MODELS``), with a
 ``[gyro]`` and/or ``[accelerometer]`` section; every number carries its unit and where in the
 datasheet it comes from (the schema is in models/README.md). For a channel, the section is
 chosen by the channel's unit (an angular rate or an acceleration).
@@ -86,13 +87,21 @@ class SensorCard:
 
 
 def models_folder() -> Path:
-    return Path(os.environ.get("BAYESCAL_MODELS") or Path(__file__).resolve().parents[2] / "models")
+    """The folder the sensor cards are read from: ``BAYESCAL_MODELS`` when set, else the
+    cards installed with the package (a wheel carries the repository's ``models/`` folder as
+    ``bayescal/_cards``), else ``models/`` beside the package (a source checkout)."""
+    if os.environ.get("BAYESCAL_MODELS"):
+        return Path(os.environ["BAYESCAL_MODELS"])
+    package = Path(__file__).resolve().parents[1]
+    installed = package / "_cards"
+    return installed if installed.is_dir() else package.parent / "models"
 
 
 def sensor_cards() -> list[SensorCard]:
     """The sensor cards there are (``bayescal sensors`` lists them).
 
-    Read from ``models/`` beside the package, or from the folder ``BAYESCAL_MODELS`` names.
+    Read from the cards installed with the package (the repository's ``models/`` folder), or
+    from the folder ``BAYESCAL_MODELS`` names.
 
     Returns
     -------

@@ -10,6 +10,7 @@ with ordinary file reads into fresh buffers, not a memory map: the pages of a ma
 pass has touched stay in the process's resident memory, the buffers of a read do not.
 """
 
+import contextlib
 import os
 import shutil
 import tempfile
@@ -18,6 +19,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
+
+from .._output import signals_deferred, write_error
 
 BLOCK = 1 << 20
 """Samples per block read (8 MB of float64): large enough that the per-block overhead
@@ -129,6 +132,20 @@ def _remove(path: Path, folder: Path | None = None) -> None:
         path.unlink(missing_ok=True)
 
 
+@contextlib.contextmanager
+def _spooling(path):
+    """A full disk (or any refused write) while spooling, said with where to spool instead."""
+    try:
+        yield
+    except OSError as error:
+        raise write_error(
+            path,
+            error,
+            fix="set BAYESCAL_SPOOL to a folder on a disk with room for the record "
+            "(8 bytes a sample)",
+        ) from None
+
+
 class SpoolWriter:
     """Appends float64 blocks to a new spooled series; :meth:`finish` returns it.
 
@@ -136,14 +153,25 @@ class SpoolWriter:
 
     def __init__(self, folder: Path | None = None, name: str = "series"):
         self._own = folder is None
-        self.folder = spool_folder() if folder is None else Path(folder)
-        self.path = self.folder / f"{name}.f8"
-        self._handle = open(self.path, "wb")  # noqa: SIM115 (open across appends)
+        self.folder = None
+        spool = folder or os.environ.get("BAYESCAL_SPOOL") or tempfile.gettempdir()
+        try:
+            # A signal waits until the folder is made and known, so that it is removed below.
+            with signals_deferred(), _spooling(spool):
+                self.folder = spool_folder() if folder is None else Path(folder)
+            self.path = self.folder / f"{name}.f8"
+            with _spooling(self.path):
+                self._handle = open(self.path, "wb")  # noqa: SIM115 (open across appends)
+        except BaseException:  # a full disk, or a signal: no writer, and no folder left
+            if self.folder is not None:
+                _remove(self.folder / f"{name}.f8", self.folder if self._own else None)
+            raise
         self.size = 0
 
     def append(self, values) -> None:
         block = np.ascontiguousarray(values, dtype=np.float64)
-        block.tofile(self._handle)
+        with _spooling(self.path):
+            self._handle.write(block.data)  # not tofile: its error carries no errno
         self.size += block.size
 
     def fill(self, count: int, value: float = np.nan) -> None:
@@ -154,7 +182,8 @@ class SpoolWriter:
             count -= size
 
     def finish(self) -> SpooledSeries:
-        self._handle.close()
+        with _spooling(self.path):
+            self._handle.close()
         return SpooledSeries(self.path, self.size, self.folder if self._own else None)
 
     def abandon(self) -> None:

@@ -281,10 +281,11 @@ def stream_channel(
     head.require(channel, "channel")
     time_name = None if rate is not None else find_time_column(head, time_column)
     wanted = _raw_names(first_batch.schema.names, {channel, time_name} - {None})
-    writer = SpoolWriter(name=channel.replace("/", "_"))
-    joiner = _Joiner(writer, gaps, source, time_name)
-    bar = _progress_bar(path, progress)
+    writer = bar = None
     try:
+        writer = SpoolWriter(name=channel.replace("/", "_"))
+        joiner = _Joiner(writer, gaps, source, time_name)
+        bar = _progress_bar(path, progress)
         record_start, row = None, 0
         for number, read in enumerate(_row_blocks(path, source, wanted, skip_rows)):
             block = _without_placeholder(read) if number == 0 else read
@@ -318,7 +319,8 @@ def stream_channel(
             )
         spooled = writer.finish()
     except BaseException:
-        writer.abandon()
+        if writer is not None:
+            writer.abandon()
         raise
     finally:
         if bar is not None:
@@ -365,9 +367,15 @@ def _progress_bar(path: Path, shown: bool):
 
 
 def _raw_names(headers, names: set[str]) -> list[str]:
-    """The file's own header names (units and all) of the columns ``names``."""
+    """The file's own header names (units and all) of the columns ``names``: a Parquet
+    column of lists ``vec`` holds the columns ``vec_0``, ``vec_1``, ..."""
     from ._readers import split_header
+
+    def holds(name: str) -> bool:
+        return name in names or any(
+            wanted.startswith(f"{name}_") and wanted[len(name) + 1 :].isdigit() for wanted in names
+        )
 
     headers = [str(name) for name in headers]
     split, _ = split_header(headers)
-    return [header for header, name in zip(headers, split, strict=True) if name in names]
+    return [header for header, name in zip(headers, split, strict=True) if holds(name)]

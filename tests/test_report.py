@@ -9,27 +9,34 @@ import re
 import numpy as np
 import pytest
 import xarray as xr
-from browser import chromium, rendered, run_browser
+from browser import chromium, followed, rendered, run_browser
 
 import bayescal as bc
 
 RATE_HZ = 10.0
 N_SAMPLES = 2**13
+GYRO_K = 1e-3  # deg/s*sqrt(Hz), the gyro's rate random walk
+THERMAL_SLOPE = 0.02  # deg/s/degC, the gyro's bias against its die temperature
 IMAGE = re.compile(r'<img[^>]*src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
 
 
 def _recording(path):
-    """A short two-channel recording: a gyro (white noise and a random walk) and an
+    """A short two-channel recording with its die temperature (warming 10 degC from power-on):
+    a gyro (white noise, a random walk and a bias that follows the temperature) and an
     accelerometer at 1 g, both simulated by bayescal's own model."""
     import jax
 
-    gyro = bc.NoiseModel(rate_hz=RATE_HZ, bias=0.2, N=0.02, K=1e-3)
+    gyro = bc.NoiseModel(rate_hz=RATE_HZ, bias=0.2, N=0.02, K=GYRO_K)
     accel = bc.NoiseModel(rate_hz=RATE_HZ, bias=9.81, N=0.004, K=2e-4)
     keys = jax.random.split(jax.random.PRNGKey(5), 2)
+    time = np.arange(N_SAMPLES) / RATE_HZ
+    temperature = 25 + 10 * (1 - np.exp(-time / 150))
     columns = {
-        "time": np.arange(N_SAMPLES) / RATE_HZ,
-        "gyro_x[deg/s]": np.asarray(gyro.sample(keys[0], N_SAMPLES)),
+        "time": time,
+        "gyro_x[deg/s]": np.asarray(gyro.sample(keys[0], N_SAMPLES))
+        + THERMAL_SLOPE * (temperature - 25),
         "acc_z[m/s^2]": np.asarray(accel.sample(keys[1], N_SAMPLES)),
+        "temperature[degC]": temperature,
     }
     lines = [",".join(columns)]
     lines += [",".join(repr(float(v)) for v in row) for row in zip(*columns.values(), strict=True)]
@@ -37,18 +44,12 @@ def _recording(path):
     return path
 
 
-def _findings(channel="gyro_x", *, thermal=True, samples=2**13):
-    """A real discovery on a simulated record named ``channel`` (10 Hz): with ``thermal``, a
-    bias that follows a warming die's temperature (0.004 deg/s/degC), found as
-    thermal_bias; without, white noise alone, where nothing is found."""
+def _nothing_found():
+    """A real discovery where there is nothing to find: white noise alone (10 Hz, 410 s)."""
     from bayescal.report._discovery import Findings
 
-    time = np.arange(samples) / RATE_HZ
-    temperature = 25 + 10 * (1 - np.exp(-time / 150)) if thermal else None
-    y = bc.NoiseModel(rate_hz=RATE_HZ, N=0.02).simulate(samples, seed=2 if thermal else 3)
-    if thermal:
-        y = y + 0.004 * temperature
-    found = bc.discover(y, RATE_HZ, temperature=temperature, unit="deg/s", channel=channel, seed=1)
+    y = bc.NoiseModel(rate_hz=RATE_HZ, N=0.02).simulate(2**12, seed=3)
+    found = bc.discover(y, RATE_HZ, unit="deg/s", channel="gyro_y", seed=1)
     return Findings.of(found, source="simulated")
 
 
@@ -75,8 +76,14 @@ def bench_csv(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def report(tmp_path_factory, bench_csv):
-    """A report of the two channels, with a sensor card and a hand-made discovery."""
+    """A report of the two channels, with a sensor card and discovery on the gyro."""
+    from bayescal.report._discovery import discover_channel
     from bayescal.report._report import report_recording
+
+    def discoveries(recording, channel):
+        if channel.channel != "gyro_x":
+            return None
+        return discover_channel(recording, channel, seed=1)
 
     folder = tmp_path_factory.mktemp("report")
     outcome = report_recording(
@@ -87,7 +94,7 @@ def report(tmp_path_factory, bench_csv):
         sensor="MPU-6050",
         terms="white,rrw",
         seed=1,
-        discoveries={"gyro_x": _findings()},
+        discoveries=discoveries,
     )
     return outcome, bench_csv
 
@@ -107,7 +114,8 @@ def test_report_files_and_json(report):
     assert document["channels"]["acc_z"]["datasheet"]["parameters"]["N"]["unit"] == (
         "m/s^2/sqrt(Hz)"
     )
-    assert document["discoveries"]["gyro_x"]["effects"][0]["name"] == "thermal_bias"
+    found = [effect["name"] for effect in document["discoveries"]["gyro_x"]["effects"]]
+    assert "thermal_bias" in found
     assert set(document["discoveries"]["gyro_x"]["diagnostics"]) == {
         "allan",
         "spectrum",
@@ -184,9 +192,72 @@ def test_discovery_section_alone(report):
     assert len(images) == 4
     for image in images:
         _assert_not_blank(image)
-    empty = discovery_section(_findings("gyro_y", thermal=False, samples=2**12))
+    empty = discovery_section(_nothing_found())
     assert "No effect found" in empty and "still fails" not in empty
     assert len(IMAGE.findall(empty)) == 3  # Allan, spectrum, residual: no temperature
+
+
+def test_the_channel_tells_one_story_with_its_effect(report):
+    """Discovery found the thermal bias the gyro's noise model (white, rrw) lacks: the
+    summary, the JSON and the terminal show the noise of the model that holds it — its K and
+    c1 hold the simulated ones, where the noise model without it read K too high — and mark
+    the noise model's numbers as contaminated, linked to the discovery."""
+    from bayescal.report._format import stacked
+    from bayescal.report._report import summary_text
+
+    outcome, _ = report
+    gyro = next(analysis for analysis in outcome.analyses if analysis.channel == "gyro_x")
+    assert gyro.effects.effects == ("thermal_bias",) and gyro.effects.passed
+    document = json.loads(outcome.json.read_text())
+    told = document["channels"]["gyro_x"]["with_effects"]
+    k, c1 = told["parameters"]["K"], told["parameters"]["c1"]
+    assert k["q05"] <= GYRO_K <= k["q95"], k
+    assert c1["q05"] <= THERMAL_SLOPE <= c1["q95"], c1
+    absorbed = document["channels"]["gyro_x"]["bayesian"]["parameters"]["K"]
+    assert absorbed["q05"] > GYRO_K, absorbed  # the drift read as a random walk
+    assert "with_effects" not in document["channels"]["acc_z"]
+    page = outcome.html.read_text()
+    summary = page[page.index("<h2>Summary</h2>") : page.index("<h2>Posterior health checks")]
+    assert "href='#discovery-gyro_x'" in summary
+    assert stacked(k["mean"], k["q05"], k["q95"], k["unit"]) in summary
+    assert stacked(absorbed["mean"], absorbed["q05"], absorbed["q95"], k["unit"]) not in summary
+    assert "contaminated" in page[page.index("<section id='channel-gyro_x'>") :]
+    text = summary_text(outcome)
+    assert "gyro_x   with thermal_bias:" in text and "discovery found thermal_bias" in text
+    assert "contaminated" in text
+
+
+def test_discovery_figures_draw_the_bounds_of_their_checks(report):
+    """A point of a discovery's Allan figure lies outside the band it is drawn in exactly
+    when the Allan deviation check fails, before and after (the band is the check's own:
+    Bonferroni-corrected over the taus)."""
+    outcome, _ = report
+    for findings in (outcome.findings["gyro_x"], _nothing_found()):
+        allan = findings.curves.allan
+        check = next(c for c in findings.discovery.checks if c.name == "allan_deviation")
+        for measured, low, high, band_low, band_high, passed in (
+            (
+                allan.adev,
+                allan.baseline_check_low,
+                allan.baseline_check_high,
+                allan.baseline_low,
+                allan.baseline_high,
+                check.passed_before,
+            ),
+            (
+                allan.final_adev,
+                allan.final_check_low,
+                allan.final_check_high,
+                allan.final_low,
+                allan.final_high,
+                check.passed_after,
+            ),
+        ):
+            outside = (np.asarray(measured) < low) | (np.asarray(measured) > high)
+            assert outside.any() == (not passed), (findings.channel, outside, passed)
+            # The check's bounds hold the pointwise 90 % band: a point may leave the band
+            # (one in ten does by chance) and still pass.
+            assert np.all(low <= band_low) and np.all(band_high <= high)
 
 
 def test_no_figure_changes_matplotlib_state(report):
@@ -259,11 +330,22 @@ def test_page_renders_in_a_browser(report, tmp_path):
     _assert_not_blank(imread(screenshot))
 
 
-def test_demo_writes_the_page(run_cli, tmp_path):
-    """The demo's whole chain (shortened recording: the default 25 minutes is the same code
-    with more samples)."""
+def test_the_summary_links_to_the_discovery_section(report, tmp_path):
+    """In a browser, the summary's link of the gyro, whose numbers come from the model with
+    the effect discovery found, goes to that discovery: the page scrolls to its section."""
+    outcome, _ = report
+    went = followed(outcome.html, "a[href='#discovery-gyro_x']", tmp_path / "profile")
+    assert went["hash"] == "#discovery-gyro_x" and went["target"] == "discovery-gyro_x", went
+    assert 0 <= went["top"] < went["height"] and went["scrolled"] > 0, went
+
+
+def test_demo_writes_the_page_and_tells_the_hidden_effects_story(run_cli, tmp_path):
+    """The demo as a new user runs it (25 minutes, seed 0; benchmarks/demo_story.py runs its
+    gyro_z over 50 seeds): discovery names the thermal bias hidden in gyro_z, the terminal
+    says so, and the summary shows gyro_z's noise from the model that holds it, its K and c1
+    holding the simulated ones (90 % intervals)."""
     out = tmp_path / "demo"
-    code, stdout, stderr = run_cli("demo", "--out", out, "--minutes", "5", "--quiet")
+    code, stdout, stderr = run_cli("demo", "--out", out, "--quiet")
     assert code == 0, stderr
     page = out / "demo_imu_report.html"
     assert page.is_file() and f"report: {page}" in stdout
@@ -272,7 +354,8 @@ def test_demo_writes_the_page(run_cli, tmp_path):
     for column in ("gyro_x[deg/s]", "gyro_z[deg/s]", "acc_z[m/s^2]", "temperature[degC]"):
         assert column in header
     truth = json.loads((out / "demo_truth.json").read_text())
-    assert truth["hidden_effect"]["name"] == "thermal_bias"
+    hidden = truth["hidden_effect"]
+    assert hidden["name"] == "thermal_bias" and hidden["channel"] == "gyro_z"
     text = page.read_text()
     assert "Against the datasheet: MPU-6050" in text
     # Three figures per channel, and discovery's four per gyro (with the temperature).
@@ -280,3 +363,12 @@ def test_demo_writes_the_page(run_cli, tmp_path):
     document = json.loads((out / "demo_imu_report.json").read_text())
     acc_z = document["channels"]["acc_z"]["bayesian"]["parameters"]["bias"]
     assert acc_z["q05"] < 9.80665 + 0.09 < acc_z["q95"]
+    # The story of the hidden-effect channel.
+    assert "  gyro_z   with thermal_bias:" in stdout, stdout
+    assert "discovery found thermal_bias" in stdout
+    told = document["channels"]["gyro_z"]["with_effects"]
+    k, c1 = told["parameters"]["K"], told["parameters"]["c1"]
+    assert k["q05"] <= truth["channels"]["gyro_z"]["K"]["value"] <= k["q95"], k
+    assert c1["q05"] <= hidden["c1"]["value"] <= c1["q95"], c1
+    for channel in ("gyro_x", "gyro_y", "acc_x", "acc_y", "acc_z"):
+        assert "with_effects" not in document["channels"][channel], channel

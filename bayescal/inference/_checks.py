@@ -11,7 +11,7 @@ when its p-value is below ``CHECK_LEVEL``.
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import fft, stats
@@ -51,7 +51,13 @@ def allan_check(
     dominates at each tau. The band is the model's: its EDF for that noise type, not for a type
     identified from the data (unreliable from a few long averages). ``allan``: that deviation
     at octave taus, and ``count`` the residual's present samples, when already known (a long
-    record's each cost a pass over it)."""
+    record's each cost a pass over it).
+
+    Its ``curve`` holds what a figure of it draws: the measured deviation, the model's 90 %
+    band at each tau (``model_low``, ``model_high``: pointwise, so about one point in ten lies
+    outside by chance) and the check's own bounds (``check_low``, ``check_high``: the band at
+    the Bonferroni-corrected level CHECK_LEVEL / taus, two-sided), outside which a point fails
+    the check."""
     if allan is None:
         allan = allan_deviation(residual, rate_hz, "octave")
     finite = np.isfinite(allan.deviation)
@@ -67,7 +73,15 @@ def allan_check(
             "p_value": 1.0,
             "location": {"untested": "no tau with a measured Allan deviation and a model's"},
             "unit": unit,
-            "curve": {"tau_s": [], "adev": [], "model_low": [], "model_high": []},
+            "curve": {
+                "tau_s": [],
+                "adev": [],
+                "model": [],
+                "model_low": [],
+                "model_high": [],
+                "check_low": [],
+                "check_high": [],
+            },
         }
     tau, deviation, predicted = allan.tau[usable], allan.deviation[usable], predicted[usable]
     n_phase = (finite_moments(residual)[0] if count is None else count) + 1
@@ -91,6 +105,11 @@ def allan_check(
             excess = np.sqrt(np.maximum(deviation[flagged] ** 2 - predicted[flagged], 1e-300))
             slope = np.polyfit(np.log(tau[flagged]), np.log(excess), 1)[0]
             location["excess_slope"] = float(slope)
+    tail = CHECK_LEVEL / usable.sum() / 2  # a point whose p_each * taus < CHECK_LEVEL fails
+
+    def bound(probability):
+        return np.sqrt(predicted * stats.chi2.ppf(probability, edf) / edf).tolist()
+
     return {
         "name": "allan_deviation",
         "statistic": float(np.max(np.abs(np.log(ratio)))),
@@ -100,8 +119,11 @@ def allan_check(
         "curve": {
             "tau_s": tau.tolist(),
             "adev": deviation.tolist(),
-            "model_low": np.sqrt(predicted * stats.chi2.ppf(0.05, edf) / edf).tolist(),
-            "model_high": np.sqrt(predicted * stats.chi2.ppf(0.95, edf) / edf).tolist(),
+            "model": np.sqrt(predicted).tolist(),
+            "model_low": bound(0.05),
+            "model_high": bound(0.95),
+            "check_low": bound(tail),
+            "check_high": bound(1 - tail),
         },
     }
 
@@ -442,6 +464,11 @@ class FitCheck:
         power, 0.05 in the lag-1 autocorrelation).
     misfit : str
         Where and by how much the model misfits, in words (empty when it passed).
+    curve : dict
+        What a figure of the check draws (the Allan deviation's: ``tau_s``, ``adev``, the
+        model's ``model``, its pointwise 90 % band ``model_low``/``model_high`` and the
+        check's bounds ``check_low``/``check_high``, outside which a point fails it); empty
+        for the other checks. Not part of the JSON.
     """
 
     name: str
@@ -450,6 +477,7 @@ class FitCheck:
     location: dict
     passed: bool
     misfit: str
+    curve: dict = field(default_factory=dict, compare=False, repr=False)
 
     def as_dict(self) -> dict:
         """The check as the JSON documents hold it (``fit_checks``).
@@ -517,11 +545,23 @@ def noise_model_checker(summary, values, unit: str, allan=None) -> Callable[...,
                     location=one["location"],
                     passed=passed,
                     misfit="" if passed else material,
+                    curve=_tolerated(one.get("curve", {})),
                 )
             )
         return found
 
     return check
+
+
+def _tolerated(curve: dict) -> dict:
+    """An Allan check's curve with its bounds widened to the tolerance: a departure within
+    ADEV_TOLERANCE of the model's deviation is no misfit, however significant."""
+    if not curve.get("model"):
+        return dict(curve)
+    model = np.asarray(curve["model"])
+    low = np.minimum(curve["check_low"], (1 - ADEV_TOLERANCE) * model)
+    high = np.maximum(curve["check_high"], (1 + ADEV_TOLERANCE) * model)
+    return {**curve, "check_low": low.tolist(), "check_high": high.tolist()}
 
 
 def _material(check: dict) -> str:

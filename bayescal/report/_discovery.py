@@ -42,7 +42,9 @@ def _listed(values) -> list:
 @dataclass(frozen=True)
 class AllanCurves:
     """The overlapping Allan deviation of the baseline's residual (``adev``) and of the
-    final model's (``final_adev``), each model's 90 % band at those taus, channel unit."""
+    final model's (``final_adev``), each model's pointwise 90 % band at those taus and the
+    bounds of its check (``*_check_low``, ``*_check_high``: a point outside them fails the
+    Allan deviation check, Bonferroni-corrected over the taus), channel unit."""
 
     tau_s: np.ndarray
     adev: np.ndarray
@@ -52,6 +54,10 @@ class AllanCurves:
     final_low: np.ndarray
     final_high: np.ndarray
     unit: str
+    baseline_check_low: np.ndarray = ()
+    baseline_check_high: np.ndarray = ()
+    final_check_low: np.ndarray = ()
+    final_check_high: np.ndarray = ()
 
     def as_dict(self) -> dict:
         return {
@@ -59,9 +65,13 @@ class AllanCurves:
             "adev": _listed(self.adev),
             "baseline_low": _listed(self.baseline_low),
             "baseline_high": _listed(self.baseline_high),
+            "baseline_check_low": _listed(self.baseline_check_low),
+            "baseline_check_high": _listed(self.baseline_check_high),
             "final_adev": _listed(self.final_adev),
             "final_low": _listed(self.final_low),
             "final_high": _listed(self.final_high),
+            "final_check_low": _listed(self.final_check_low),
+            "final_check_high": _listed(self.final_check_high),
             "unit": self.unit,
         }
 
@@ -218,6 +228,10 @@ def discovery_curves(discovery: Discovery) -> DiscoveryCurves:
             final_low=np.asarray(allan_after.get("model_low", [])),
             final_high=np.asarray(allan_after.get("model_high", [])),
             unit=unit,
+            baseline_check_low=np.asarray(allan_before.get("check_low", [])),
+            baseline_check_high=np.asarray(allan_before.get("check_high", [])),
+            final_check_low=np.asarray(allan_after.get("check_low", [])),
+            final_check_high=np.asarray(allan_after.get("check_high", [])),
         ),
         spectrum=SpectrumCurves(
             frequency_hz=np.asarray(summary.frequency_hz),

@@ -82,15 +82,24 @@ def _log_axes(axes, xlabel: str, ylabel: str, title: str, fontsize: float | None
 # The noise of a channel
 
 
-def allan_figure(channel: str, unit: str, allan, band=None):
+def allan_figure(channel: str, unit: str, allan, band=None, check=None):
     """The measured Allan deviation (``allan``, a :class:`~bayescal.DeviationResult`) with
     its classical bars and, with a posterior, its bands (an
-    :class:`~bayescal.inference._bands.AllanBand`)."""
+    :class:`~bayescal.inference._bands.AllanBand`) and the bounds of the model's Allan
+    deviation check (``check``, a :class:`~bayescal.FitCheck`: outside them a point fails
+    it; the bands are pointwise 90 %, which about one point in ten leaves by chance)."""
     shown = pretty_unit(unit)
     percent = f"{100 * allan.confidence:g} %"
     figure, (axes,) = new_figure(7.2, 4.4)
     tau, deviation = np.asarray(allan.tau), np.asarray(allan.deviation)
     usable = np.isfinite(deviation)
+    if check is not None and check.curve.get("check_low"):
+        curve = check.curve
+        for edge, label in (
+            (curve["check_low"], "the fit check's bounds (a point outside fails it)"),
+            (curve["check_high"], None),
+        ):
+            axes.plot(curve["tau_s"], edge, color="#08519c", lw=0.9, ls="--", label=label)
     if band is not None:
         level = f"{100 * band.level:g} %"
         axes.fill_between(
@@ -261,35 +270,60 @@ def _stages(found: bool, before, after):
     return [("before: baseline model", before), ("after: final model", after)]
 
 
+def _check_band(axes, tau, low, high, label: str) -> None:
+    """A check's bounds on an Allan figure: a point outside them fails the check."""
+    if len(low):
+        axes.fill_between(
+            tau[: len(low)], low, high, color="#c6dbef", alpha=0.8, lw=0, label=label, zorder=0
+        )
+
+
+CHECK_BAND_LABEL = "the check's bounds (a point outside fails it; p < 0.01 over all τ)"
+
+
 def discovery_allan_figure(channel: str, unit: str, curves, found: bool):
-    """The Allan deviation of each model's residual within that model's band (``curves``: a
-    discovery's :class:`~bayescal.report._discovery.AllanCurves`): before, the recording
+    """The Allan deviation of each model's residual within that model's bands (``curves``:
+    a discovery's :class:`~bayescal.report._discovery.AllanCurves`): before, the recording
     against the baseline model; after, the recording less the terms discovery added against
-    the final model."""
+    the final model. The lighter band is the check's (a point outside it fails the Allan
+    deviation check, whose p-value is Bonferroni-corrected over the taus); the darker one the
+    model's pointwise 90 % band, which about one point in ten leaves by chance."""
     stages = _stages(
         found,
-        (curves.adev, curves.baseline_low, curves.baseline_high, "recording"),
+        (
+            curves.adev,
+            curves.baseline_low,
+            curves.baseline_high,
+            curves.baseline_check_low,
+            curves.baseline_check_high,
+            "recording",
+        ),
         (
             curves.final_adev,
             curves.final_low,
             curves.final_high,
+            curves.final_check_low,
+            curves.final_check_high,
             "recording less the added deterministic terms",
         ),
     )
     figure, panels = new_figure(4.2 * len(stages) + 0.4, 3.8, len(stages))
-    for axes, (title, (measured, low, high, label)) in zip(panels, stages, strict=True):
-        tau = curves.tau_s[: len(measured)]
+    tau_all = np.asarray(curves.tau_s)
+    for axes, (title, (measured, low, high, check_low, check_high, label)) in zip(
+        panels, stages, strict=True
+    ):
+        _check_band(axes, tau_all, check_low, check_high, CHECK_BAND_LABEL)
         if len(low):
             axes.fill_between(
-                curves.tau_s[: len(low)],
+                tau_all[: len(low)],
                 low,
                 high,
-                color="#9ecae1",
+                color="#4292c6",
                 alpha=0.7,
                 lw=0,
                 label="model's 90 % band (pointwise)",
             )
-        axes.plot(tau, measured, "o-", ms=3, lw=1, color="black", label=label)
+        axes.plot(tau_all[: len(measured)], measured, "o-", ms=3, lw=1, color="black", label=label)
         _log_axes(
             axes, "τ [s]", f"Allan deviation [{pretty_unit(unit)}]", f"{channel}: {title}", 9.5
         )

@@ -24,6 +24,7 @@ th { background: #eef3f8; } td.num { font-variant-numeric: tabular-nums; }
 tr.failed td { background: #fde8ea; } .note { color: #555; font-size: 0.9em; }
 img.figure { display: block; max-width: 100%; margin: 0.6em 0; border: 1px solid #ddd; }
 code { background: #f4f4f4; padding: 0 0.2em; }
+.story { background: #fff8e1; border: 2px solid #e6a700; padding: 0.6em 1em; margin: 1em 0; }
 """
 """The style of every page (inline: a page opens offline)."""
 

@@ -14,11 +14,13 @@ figures are :mod:`._figures`'.
 """
 
 import datetime
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib.metadata import version
 
 from .._errors import InputError
+from ..capabilities._effect_noise import EffectNoise, noise_with_effects
 from ..inference._bands import AllanBand, SpectrumBand, allan_band, spectrum_band
+from ..inference._sampler import Sampler
 from ..models._terms import PARAMETERS, card_values, display_values, parameter_unit
 from ._discovery import Findings, discovery_document, discovery_figures
 from ._figures import allan_figure, embedded, pair_figure, spectrum_figure
@@ -32,7 +34,14 @@ from ._format import (
     quantity,
     stacked,
 )
-from ._noise import BIAS_DEFINITION, NoiseAnalysis, display_summary, noise_document, read_at
+from ._noise import (
+    BIAS_DEFINITION,
+    INTERVAL,
+    NoiseAnalysis,
+    display_summary,
+    noise_document,
+    read_at,
+)
 from ._noise import t_interval_explanation as explanation_of
 
 DATASHEET_TOLERANCE = (0.8, 1.25)
@@ -61,15 +70,15 @@ class DatasheetRow:
     """The card's value in the units datasheets use (label -> value)."""
     classical: object | None = None
     """The IEEE 952 reading (:class:`~bayescal.SlopeReading`), when there is one."""
-    bayesian: object | None = None
-    """The posterior summary (mean, q05, q95), when the model holds the term."""
+    bayesian: dict | None = None
+    """The posterior's ``mean``, ``q05`` and ``q95``, when the model holds the term."""
 
     @property
     def ratio(self) -> dict | None:
         """Measured / datasheet: mean, q05 and q95 of the posterior over the card's value."""
         if self.bayesian is None:
             return None
-        return {key: getattr(self.bayesian, key) / self.datasheet for key in ("mean", "q05", "q95")}
+        return {key: value / self.datasheet for key, value in self.bayesian.items()}
 
     @property
     def verdict(self) -> str | None:
@@ -100,7 +109,7 @@ class DatasheetRow:
                 key: getattr(self.classical, key) for key in ("value", "ci_low", "ci_high", "kind")
             }
         if self.bayesian is not None:
-            row["bayesian"] = {key: getattr(self.bayesian, key) for key in ("mean", "q05", "q95")}
+            row["bayesian"] = dict(self.bayesian)
             row["ratio"] = self.ratio
             row["verdict"] = self.verdict
         return row
@@ -127,17 +136,29 @@ class DatasheetComparison:
         }
 
 
-def datasheet_comparison(card, analysis: NoiseAnalysis) -> DatasheetComparison:
+def _interval_of(summary) -> dict:
+    """mean, q05, q95 of a posterior summary (typed or a dict)."""
+    if isinstance(summary, dict):
+        return {key: summary[key] for key in ("mean", "q05", "q95")}
+    return {key: getattr(summary, key) for key in ("mean", "q05", "q95")}
+
+
+def datasheet_comparison(card, analysis: NoiseAnalysis, effects=None) -> DatasheetComparison:
     """How the measured unit compares with its sensor card: for each figure the card gives,
-    the datasheet value, the classical reading and the posterior, their ratio and a verdict
-    (:attr:`DatasheetRow.verdict`); ``unavailable`` when the card has no section for this
-    kind of channel."""
+    the datasheet value, the classical reading and the posterior (of the model with the
+    effects discovery found, ``effects``, where it found any the noise model lacks), their
+    ratio and a verdict (:attr:`DatasheetRow.verdict`); ``unavailable`` when the card has no
+    section for this kind of channel."""
     unit = analysis.unit
     try:
         values = card_values(card, unit)
     except InputError as error:
         return DatasheetComparison(card.name, card.datasheet, unavailable=str(error))
-    posterior = {} if analysis.noise is None else analysis.noise.parameters
+    if effects is not None:
+        posterior = effects.parameters
+    else:
+        posterior = {} if analysis.noise is None else analysis.noise.parameters
+    posterior = {name: _interval_of(summary) for name, summary in posterior.items()}
     readings = analysis.classical.slope_readings
     rows = tuple(
         DatasheetRow(
@@ -157,12 +178,16 @@ def datasheet_comparison(card, analysis: NoiseAnalysis) -> DatasheetComparison:
 @dataclass(frozen=True)
 class ChannelAnalysis:
     """Everything the page shows of one channel: its noise, the posterior bands of its
-    figures (None without a posterior), how it compares with its sensor card."""
+    figures (None without a posterior), how it compares with its sensor card and, where
+    discovery found effects the noise model lacks, the noise in the model that holds them
+    (:class:`~bayescal.capabilities._effect_noise.EffectNoise`): the channel's numbers then
+    come from it, and the noise model's are shown as contaminated."""
 
     noise: NoiseAnalysis
     allan: AllanBand | None = None
     spectrum: SpectrumBand | None = None
     datasheet: DatasheetComparison | None = None
+    effects: EffectNoise | None = None
 
     @property
     def channel(self) -> str:
@@ -179,12 +204,20 @@ class ChannelAnalysis:
 
     @property
     def failures(self) -> list[str]:
-        """The failed sampler checks, then the misfits."""
-        return [] if self.noise.noise is None else list(self.noise.noise.failures)
+        """The failed sampler checks, then the misfits (of the model with the effects too)."""
+        failures = [] if self.noise.noise is None else list(self.noise.noise.failures)
+        if self.effects is not None:
+            failures += [f"{_with(self.effects)}: {f}" for f in self.effects.failures]
+        return failures
 
     @property
     def passed(self) -> bool:
         return not self.failures
+
+
+def _with(effects: EffectNoise) -> str:
+    """The model with the effects, in words: ``the model with thermal_bias``."""
+    return "the model with " + " and ".join(effects.effects)
 
 
 def with_bands(noise: NoiseAnalysis, *, seed: int = 0, card=None) -> ChannelAnalysis:
@@ -196,6 +229,24 @@ def with_bands(noise: NoiseAnalysis, *, seed: int = 0, card=None) -> ChannelAnal
         spectrum = spectrum_band(noise.fit, seed=seed)
     datasheet = None if card is None else datasheet_comparison(card, noise)
     return ChannelAnalysis(noise, allan, spectrum, datasheet)
+
+
+def with_effects(
+    analysis: ChannelAnalysis, findings: Findings, *, seed: int = 0, sampler=None, card=None
+) -> ChannelAnalysis:
+    """``analysis`` told with its discovery: where discovery found effects the noise model
+    lacks, the noise of the model that holds them
+    (:func:`~bayescal.capabilities._effect_noise.noise_with_effects`) and the datasheet
+    comparison made from it; unchanged otherwise."""
+    if analysis.noise.noise is None:
+        return analysis
+    effects = noise_with_effects(
+        analysis.noise.noise, findings.discovery, seed=seed, sampler=sampler or Sampler()
+    )
+    if effects is None:
+        return analysis
+    datasheet = None if card is None else datasheet_comparison(card, analysis.noise, effects)
+    return replace(analysis, effects=effects, datasheet=datasheet)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -305,7 +356,9 @@ def _datasheet_html(comparison: DatasheetComparison | None) -> str:
             else interval(classical.value, classical.ci_low, classical.ci_high, unit)
         )
         posterior_text = (
-            _posterior(row.bayesian, unit) if row.bayesian else "— (term not in the model)"
+            interval(row.bayesian["mean"], row.bayesian["q05"], row.bayesian["q95"], unit)
+            if row.bayesian
+            else "— (term not in the model)"
         )
         verdict = row.verdict or "—"
         ratio = row.ratio
@@ -333,6 +386,65 @@ def _datasheet_html(comparison: DatasheetComparison | None) -> str:
     )
 
 
+def _link(effects: EffectNoise) -> str:
+    """The effects, each linked to the channel's discovery section."""
+    target = f"#discovery-{esc(effects.channel)}"
+    return " and ".join(
+        f"<a href='{target}'><code>{esc(name)}</code></a>" for name in effects.effects
+    )
+
+
+def _effects_html(analysis: ChannelAnalysis) -> str:
+    """The channel's story where discovery found effects its noise model lacks: what was
+    found, the noise and the effects' parameters from the model that holds them, its
+    checks; and that the noise model below is contaminated."""
+    effects, noise = analysis.effects, analysis.noise.noise
+    rows = []
+    for name, entry in effects.parameters.items():
+        shown = "<br>".join(
+            interval(values["mean"], values["q05"], values["q95"], label)
+            for label, values in display_summary(name, entry, analysis.unit).items()
+        )
+        rows.append(
+            f"<tr><td>{esc(_PARAMETER_NAMES.get(name, name))}</td><td class='num'>"
+            f"{interval(entry['mean'], entry['q05'], entry['q95'], entry['unit'])}</td>"
+            f"<td class='num'>{shown or '—'}</td></tr>"
+        )
+    d = effects.diagnostics
+    health = (
+        "<span class='ok'>passed</span>"
+        if not d.failures
+        else "<span class='bad'>FAILED: " + esc("; ".join(d.failures)) + "</span>"
+    )
+    failing = [check for check in effects.checks if not check.passed]
+    fits = (
+        "<span class='ok'>passed</span> ("
+        + esc(", ".join(check.name.replace("_", " ") for check in effects.checks))
+        + ")"
+        if not failing
+        else "<span class='bad'>FAILED: " + esc("; ".join(c.misfit for c in failing)) + "</span>"
+    )
+    added = (
+        f" ({esc(', '.join(effects.added))} from the noise model, so that each of its numbers "
+        "has its counterpart)"
+        if effects.added
+        else ""
+    )
+    return (
+        f"<div class='story' id='story-{esc(analysis.channel)}'><p><b>Discovery found "
+        f"{_link(effects)} on this channel</b>, which the noise model below (terms "
+        f"{esc(', '.join(noise.terms))}) lacks: that model absorbed it into its own terms, and "
+        "its noise numbers are <b>contaminated</b>. This channel's numbers (the summary's and "
+        "the datasheet comparison's) come from the model that holds it: "
+        f"<code>{esc(' + '.join(effects.terms))}</code>{added}.</p>"
+        "<table><thead><tr><th>parameter</th><th>posterior mean [5 %, 95 %]</th>"
+        "<th>in datasheet units</th></tr></thead><tbody>" + "".join(rows) + "</tbody></table>"
+        f"<p class='note'>Its posterior checks: {health}: {d.n_steps}&nbsp;steps × "
+        f"{d.n_walkers}&nbsp;walkers, max R-hat {num(max(d.rhat.values()), 4)}, min bulk ESS "
+        f"{num(min(d.ess_bulk.values()), 4)}. Its checks against the record: {fits}.</p></div>"
+    )
+
+
 def _channel_section(analysis: ChannelAnalysis, findings: Findings | None) -> str:
     noise = analysis.noise
     classical, window = noise.classical, noise.window
@@ -351,6 +463,16 @@ def _channel_section(analysis: ChannelAnalysis, findings: Findings | None) -> st
             + "</ul></div>"
         )
     parts.append(_t_interval_html(noise))
+    effects = analysis.effects
+    if effects is not None:
+        parts.append(_effects_html(analysis))
+        parts.append(_datasheet_html(analysis.datasheet))
+        parts.append(
+            f"<h3>The noise model without {esc(' and '.join(effects.effects))} "
+            "(contaminated)</h3><p class='bad'>Contaminated by "
+            f"{_link(effects)}: the numbers and figures of this model, below, show the effect "
+            "absorbed into its terms; do not report them.</p>"
+        )
     parts.append(_side_by_side_table(noise))
     fit = noise.fit
     if fit is not None:
@@ -365,11 +487,14 @@ def _channel_section(analysis: ChannelAnalysis, findings: Findings | None) -> st
                 + "".join(f"<li>{esc(note)}</li>" for note in noise.comparison)
                 + "</ul>"
             )
-    parts.append(_datasheet_html(analysis.datasheet))
+    if effects is None:
+        parts.append(_datasheet_html(analysis.datasheet))
     channel, unit = analysis.channel, analysis.unit
+    checks = () if noise.noise is None else noise.noise.checks
+    allan_check = next((check for check in checks if check.name == "allan_deviation"), None)
     parts.append(
         embedded(
-            allan_figure(channel, unit, classical.allan, analysis.allan),
+            allan_figure(channel, unit, classical.allan, analysis.allan, allan_check),
             f"{channel}: Allan deviation",
         )
     )
@@ -386,7 +511,7 @@ def _channel_section(analysis: ChannelAnalysis, findings: Findings | None) -> st
             + "</ul>"
         )
     if findings is not None:
-        parts.append(discovery_section(findings))
+        parts.append(discovery_section(findings, analysis.effects))
     parts.append("</section>")
     return "\n".join(parts)
 
@@ -448,9 +573,11 @@ def _parameters_text(parameters: dict) -> str:
     return "<br>".join(items) or "—"
 
 
-def discovery_section(findings: Findings) -> str:
+def discovery_section(findings: Findings, story: EffectNoise | None = None) -> str:
     """HTML of a channel's discovery: the effects found with their evidence, the checks
-    before and after, and the figures (:func:`~bayescal.report._discovery.discovery_figures`)."""
+    before and after, and the figures (:func:`~bayescal.report._discovery.discovery_figures`).
+    ``story``: the channel's model with the effects, when its numbers come from it (a note
+    says where its parameters differ from discovery's final model's)."""
     discovery = findings.discovery
     channel = discovery.channel
     parts = [
@@ -482,6 +609,13 @@ def discovery_section(findings: Findings) -> str:
                 f"<td>{_location_text(effect.evidence)}</td></tr>"
             )
         parts.append("</tbody></table>")
+    if story is not None and story.added:
+        parts.append(
+            "<p class='note'>The parameters above are those of discovery's final model; the "
+            f"channel's numbers (<a href='#story-{esc(channel)}'>above</a>) come from that "
+            f"model with the noise model's {esc(', '.join(story.added))} added, whose "
+            "intervals are wider where the terms compete for the same drift.</p>"
+        )
     parts.append(
         "<h4>Checks of the baseline (posterior predictive)</h4><table><thead><tr>"
         "<th>check</th><th>statistic (as defined by the check)</th>"
@@ -530,18 +664,31 @@ def _summary_table(analyses: list[ChannelAnalysis]) -> str:
             else "<span class='bad'>FAILED</span>"
         )
         cells = []
+        effects = analysis.effects
+        shown_parameters = parameters if effects is None else effects.parameters
         for name in ("bias", "N", "B", "K"):
-            summary = parameters.get(name)
+            summary = shown_parameters.get(name)
             if summary is None:
-                cells.append("<td>—</td>")
+                cells.append(
+                    "<td>—<br><span class='note'>varies with the effect</span></td>"
+                    if name == "bias" and effects is not None
+                    else "<td>—</td>"
+                )
                 continue
+            low_high = _interval_of(summary)
             shown = stacked(
-                summary.mean, summary.q05, summary.q95, parameter_unit(name, noise.unit)
+                low_high["mean"], low_high["q05"], low_high["q95"], parameter_unit(name, noise.unit)
             )
             cells.append(f"<td class='num'>{shown}</td>")
+        story = (
+            ""
+            if effects is None
+            else f"<br><span class='note'>from the model with {_link(effects)}</span>"
+        )
         rows.append(
             f"<tr{' class=failed' if not analysis.passed else ''}>"
-            f"<td><a href='#channel-{esc(analysis.channel)}'>{esc(analysis.channel)}</a></td>"
+            f"<td><a href='#channel-{esc(analysis.channel)}'>{esc(analysis.channel)}</a>"
+            f"{story}</td>"
             f"<td class='num'>{quantity(classical.rate_hz, 'Hz')}<br>"
             f"{quantity(classical.duration_s, 's')}</td>"
             f"<td class='num'>{classical_bias}</td><td>{t_text}</td>"
@@ -587,6 +734,8 @@ def _health_table(analyses: list[ChannelAnalysis]) -> str:
             f"<td>{'yes' if d.map_converged else '<b>no</b>'}</td><td>{fits}</td>"
             f"<td>{status}</td></tr>"
         )
+        if analysis.effects is not None:
+            rows.append(_effects_health_row(analysis.effects))
     if not rows:
         return "<p>No posterior was sampled (classical analysis only).</p>"
     return (
@@ -599,12 +748,41 @@ def _health_table(analyses: list[ChannelAnalysis]) -> str:
     )
 
 
+def _effects_health_row(effects: EffectNoise) -> str:
+    d = effects.diagnostics
+    status = (
+        "<span class='ok'>passed</span>"
+        if effects.passed
+        else "<span class='bad'>FAILED: " + esc("; ".join(effects.failures)) + "</span>"
+    )
+    fits = (
+        "<span class='ok'>yes</span>"
+        if all(check.passed for check in effects.checks)
+        else "<span class='bad'>MISFIT</span>"
+    )
+    return (
+        f"<tr{' class=failed' if not effects.passed else ''}><td>{esc(effects.channel)}, "
+        f"{esc(_with(effects))}</td>"
+        f"<td class='num'>{d.n_steps}&nbsp;steps × {d.n_walkers}&nbsp;walkers</td>"
+        f"<td class='num'>{num(max(d.autocorr_time.values()), 3)} "
+        f"({'met' if d.converged else '<b>not met</b>'})</td>"
+        f"<td class='num'>{num(max(d.rhat.values()), 4)}</td>"
+        f"<td class='num'>{num(min(d.ess_bulk.values()), 4)}</td>"
+        f"<td class='num'>{num(d.acceptance_fraction, 3)}</td>"
+        f"<td>{'yes' if d.map_converged else '<b>no</b>'}</td><td>{fits}</td>"
+        f"<td>{status}</td></tr>"
+    )
+
+
 _FIGURES_NOTE = (
     "<p class='note'>Allan figures: black points are the measured overlapping Allan "
     "deviation with classical chi-square bars; the darker band is the model's exact Allan "
     "deviation over posterior draws (parameter uncertainty), the lighter band the "
     "posterior predictive band of what a recording like this one would measure (the same "
-    "with the estimator's chi-square scatter). Spectrum figures: the binned periodogram "
+    "with the estimator's chi-square scatter), both pointwise 90 %: about one point in ten "
+    "lies outside by chance; the dashed lines are the bounds of the model's Allan deviation "
+    "check (p-value Bonferroni-corrected over the taus, departures within 10 % tolerated), "
+    "outside which a point fails it. Spectrum figures: the binned periodogram "
     "the Whittle likelihood fits, as the two-sided amplitude spectral density of the "
     "samples (white noise reads N), against the model's expected periodogram.</p>"
 )
@@ -682,6 +860,34 @@ def build_report(
     return "\n".join(parts) + "\n"
 
 
+def effects_document(analysis: ChannelAnalysis) -> dict:
+    """The JSON of a channel's model with the effects discovery found (``with_effects``): the
+    numbers the summary shows for it, and why."""
+    effects = analysis.effects
+    return {
+        "effects": list(effects.effects),
+        "terms": list(effects.terms),
+        "added_from_noise_model": list(effects.added),
+        "parameters": {
+            name: {**entry, **_display_entry(name, entry, analysis.unit)}
+            for name, entry in effects.parameters.items()
+        },
+        "interval": INTERVAL,
+        "diagnostics": effects.diagnostics.as_dict(),
+        "fit_checks": [check.as_dict() for check in effects.checks],
+        "passed": effects.passed,
+        "explanation": f"discovery found {', '.join(effects.effects)}, which the noise model "
+        f"({', '.join(analysis.noise.noise.terms)}) lacks and absorbed into its terms (its "
+        "numbers, under bayesian, are contaminated): the channel's noise numbers are this "
+        "model's, the noise model's terms and the effects together",
+    }
+
+
+def _display_entry(name: str, entry: dict, unit: str) -> dict:
+    shown = display_summary(name, entry, unit)
+    return {"display": shown} if shown else {}
+
+
 def report_document(
     analyses: list[ChannelAnalysis],
     *,
@@ -704,6 +910,7 @@ def report_document(
             **noise_document(a.noise),
             "figures": figures,
             **({"datasheet": a.datasheet.as_dict()} if a.datasheet else {}),
+            **({"with_effects": effects_document(a)} if a.effects else {}),
         }
     return {
         "schema": "bayescal.report",

@@ -45,7 +45,7 @@ class Window:
         what a pad search found), and the notes it carries."""
         details = dict(description)
         start_s, stop_s = details.pop("start_s"), details.pop("stop_s")
-        selected_by = details.pop("selected_by")
+        selected_by = details.pop("selected_by", "whole record")
         notes = tuple(details.pop("notes", ()))
         return cls(start_s, stop_s, selected_by, details or None), notes
 
@@ -146,17 +146,18 @@ def t_interval_explanation(classical: ClassicalNoise) -> str:
 
 
 def display_summary(name: str, summary, unit: str) -> dict[str, dict[str, float]]:
-    """A posterior summary of noise parameter ``name`` (its mean, q05 and q95) in the units
-    datasheets use: label -> {mean, q05, q95}; empty for the bias or a unit bayescal does
-    not know."""
+    """A posterior summary of noise parameter ``name`` (its mean, q05 and q95: attributes or
+    keys) in the units datasheets use: label -> {mean, q05, q95}; empty for the bias or a unit
+    bayescal does not know."""
     if name not in TERM_OF_PARAMETER:
         return {}
+    values = {
+        key: summary[key] if isinstance(summary, dict) else getattr(summary, key)
+        for key in ("mean", "q05", "q95")
+    }
     return {
-        label: {
-            key: display_values(name, getattr(summary, key), unit)[label]
-            for key in ("mean", "q05", "q95")
-        }
-        for label in display_values(name, summary.mean, unit)
+        label: {key: display_values(name, values[key], unit)[label] for key in values}
+        for label in display_values(name, values["mean"], unit)
     }
 
 

@@ -19,7 +19,7 @@ from ..inference._sampler import Sampler
 from ..models._terms import parameter_unit, parse_terms
 from ..recording._recording import Channel, prepare_channel
 from ..recording._sensor_cards import find_card
-from ._html import ChannelAnalysis, build_report, report_document, with_bands
+from ._html import ChannelAnalysis, build_report, report_document, with_bands, with_effects
 from ._noise import NoiseAnalysis, Window
 
 DEFAULT_TERMS = "auto"
@@ -179,6 +179,16 @@ def report_recording(
                 bar.update(1)
         if not callable(discoveries):
             found_by_channel = dict(discoveries or {})
+        # Where discovery found what a channel's noise model lacks, its numbers come from the
+        # model that holds it.
+        analyses = [
+            with_effects(
+                analysis, found_by_channel[analysis.channel], seed=seed, sampler=sampler, card=card
+            )
+            if analysis.channel in found_by_channel
+            else analysis
+            for analysis in analyses
+        ]
         if bar is not None:
             bar.set_postfix_str("figures and files")
         outcome = write_report(
@@ -244,16 +254,13 @@ def write_report(
 
 
 def summary_text(outcome: ReportOutcome) -> str:
-    """The lines the command prints: one per channel, then where the page is."""
+    """The lines the command prints: one per channel (its noise from the model that holds
+    what discovery found on it, where it found something the noise model lacks), what
+    discovery found, then where the page is."""
     lines = []
     for analysis in outcome.analyses:
-        noise, unit = analysis.noise, analysis.unit
+        noise, unit, effects = analysis.noise, analysis.unit, analysis.effects
         parameters = noise.noise.parameters
-        shown = "  ".join(
-            f"{name} {parameters[name].mean:.3g} {parameter_unit(name, unit)}"
-            for name in ("N", "B", "K")
-            if name in parameters
-        )
         t_interval = noise.classical.t_interval
         t_text = (
             "t-interval valid"
@@ -261,9 +268,52 @@ def summary_text(outcome: ReportOutcome) -> str:
             else f"t-interval too narrow x{t_interval.widening:.3g}"
         )
         health = "checks passed" if analysis.passed else "HEALTH CHECK FAILED"
-        lines.append(
-            f"  {analysis.channel:<8} bias {parameters['bias'].mean:.6g} {unit}  {shown}  "
-            f"({t_text}; {health})"
-        )
+        if effects is None:
+            shown = "  ".join(
+                f"{name} {parameters[name].mean:.3g} {parameter_unit(name, unit)}"
+                for name in ("N", "B", "K")
+                if name in parameters
+            )
+            lines.append(
+                f"  {analysis.channel:<8} bias {parameters['bias'].mean:.6g} {unit}  {shown}  "
+                f"({t_text}; {health})"
+            )
+        else:
+            shown = "  ".join(
+                f"{name} {entry['mean']:.3g} {entry['unit']}"
+                for name, entry in effects.parameters.items()
+            )
+            lines.append(
+                f"  {analysis.channel:<8} with {' and '.join(effects.effects)}: {shown}  "
+                f"({t_text}; {health})"
+            )
+        findings = outcome.findings.get(analysis.channel)
+        if findings is not None:
+            lines += _discovery_lines(analysis, findings)
     lines.append(f"report: {outcome.html}")
     return "\n".join(lines)
+
+
+def _discovery_lines(analysis: ChannelAnalysis, findings) -> list[str]:
+    """What discovery found on a channel, and what the noise model read without it."""
+    discovery, indent = findings.discovery, " " * 11
+    if not discovery.effects:
+        return [f"{indent}discovery: nothing found (its baseline explains the record)"]
+    lines = []
+    for effect in discovery.effects:
+        score = effect.evidence.get("log_bayes_factor")
+        evidence = "" if score is None else f" (log Bayes factor {score:.1f})"
+        lines.append(f"{indent}discovery found {effect.name}{evidence}: {effect.explanation}")
+    effects = analysis.effects
+    if effects is not None:
+        parameters, unit = analysis.noise.noise.parameters, analysis.unit
+        absorbed = "  ".join(
+            f"{name} {parameters[name].mean:.3g} {parameter_unit(name, unit)}"
+            for name in ("N", "B", "K")
+            if name in parameters
+        )
+        lines.append(
+            f"{indent}the noise model without it ({', '.join(analysis.noise.noise.terms)}) "
+            f"read {absorbed}: contaminated, not shown above"
+        )
+    return lines

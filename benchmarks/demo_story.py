@@ -17,7 +17,13 @@ prints:
   the truth.
 
 Usage: python benchmarks/demo_story.py --seeds 0-49 --out demo_story.jsonl (one JSON line per
-seed, appended; seeds already in the file are not run again).
+seed, appended; seeds already in the file are not run again; minutes per seed on a loaded
+machine).
+
+``--least-squares`` instead prints, in seconds a seed, the ordinary least-squares slope of each
+gyro on the recorded temperature (with an intercept): the spread of the simplest unbiased
+estimator of c1 over seeds (the noise's own, on gyro_x and gyro_y, whose truth is 0), and where
+each seed's record puts it — whether a low c1 is discovery's or the record's.
 """
 
 import argparse
@@ -140,12 +146,45 @@ def summarise(rows: list[dict]) -> None:
     print(f"  model with the effect failed its checks on seeds: {failed or 'none'}")
 
 
+def least_squares(seeds: list[int], minutes: float) -> None:
+    """The least-squares slope of each gyro on the recorded temperature, per seed and over
+    seeds (mean, its standard error, sd)."""
+    from bayescal.capabilities._demo import REFERENCE_TEMPERATURE, THERMAL_SLOPE, demo_recording
+
+    slopes = []
+    for seed in seeds:
+        columns, _ = demo_recording(seed, minutes)
+        temperature = columns["temperature[degC]"] - REFERENCE_TEMPERATURE
+        design = np.column_stack([np.ones_like(temperature), temperature])
+        row = [
+            np.linalg.lstsq(design, columns[f"gyro_{axis}[deg/s]"], rcond=None)[0][1]
+            for axis in "zxy"
+        ]
+        slopes.append(row)
+        print(f"seed {seed}: gyro_z {row[0]:.5f}, gyro_x {row[1]:+.5f}, gyro_y {row[2]:+.5f}")
+    slopes = np.array(slopes)
+    print(f"least-squares slope on the temperature, deg/s/degC, seeds {seeds[0]}-{seeds[-1]}:")
+    for column, (name, truth) in enumerate(
+        (("gyro_z", THERMAL_SLOPE), ("gyro_x", 0.0), ("gyro_y", 0.0))
+    ):
+        values = slopes[:, column]
+        error = values.std(ddof=1) / math.sqrt(values.size)
+        print(
+            f"  {name} (truth {truth:g}): mean {values.mean():.5f} (se {error:.5f}), "
+            f"sd {values.std(ddof=1):.5f}"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seeds", default="0-49")
     parser.add_argument("--minutes", type=float, default=25.0)
     parser.add_argument("--out", default="demo_story.jsonl")
+    parser.add_argument("--least-squares", action="store_true")
     args = parser.parse_args()
+    if args.least_squares:
+        least_squares(_seeds(args.seeds), args.minutes)
+        return
     out = Path(args.out)
     rows = [json.loads(line) for line in out.read_text().splitlines()] if out.exists() else []
     done = {row["seed"] for row in rows}

@@ -180,7 +180,9 @@ def report_recording(
         if not callable(discoveries):
             found_by_channel = dict(discoveries or {})
         # Where discovery found what a channel's noise model lacks, its numbers come from the
-        # model that holds it.
+        # model that holds it (one more posterior for each such channel).
+        if bar is not None and found_by_channel:
+            bar.set_postfix_str("the models with discovery's effects")
         analyses = [
             with_effects(
                 analysis, found_by_channel[analysis.channel], seed=seed, sampler=sampler, card=card

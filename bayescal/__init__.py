@@ -54,6 +54,7 @@ _EXPORTS = {
     "ParkSimulation": "navigation._simulate",
     # inference
     "Sampler": "inference._sampler",
+    "FitCheck": "inference._checks",
     # capabilities
     "fit_noise": "capabilities._noise",
     "NoiseFit": "capabilities._noise",

@@ -52,11 +52,10 @@ def write_runs(folder: Path, channel: str, samples: int, layout: str) -> Path:
 
 
 def show(label: str, fleet) -> None:
-    from bayescal.report._fleet import fleet_result, fleet_text
+    from bayescal.report._fleet import fleet_text
 
-    result = fleet_result(fleet)
     print(f"\n=== {label} ===")
-    print(fleet_text(result))
+    print(fleet_text(fleet))
     for failure in fleet.failed:
         print(f"  left out: {failure.source} ({failure.kind}): {failure.message}")
     print(f"  population checks: {'passed' if fleet.passed else fleet.failures}")

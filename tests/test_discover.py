@@ -22,7 +22,7 @@ from bayescal.models._composite import (
     level_design,
 )
 from bayescal.models.effects.gauss_markov import GaussMarkov
-from bayescal.report._discovery import discovery_document
+from bayescal.report._discovery import Findings, discovery_document
 
 RATE = 20.0
 MINUTES = 12
@@ -265,7 +265,7 @@ def test_a_mismatch_too_weak_to_name_is_reported_as_unexplained():
     slope = 3.4 * WHITE_SD / math.sqrt(size) / np.linalg.norm(blocks - blocks.mean())
     found = discover(values + slope * (profile - profile.mean()), profile)
     assert found.effects == ()
-    document = discovery_document(found, source="sim")
+    document = discovery_document(Findings.of(found, source="sim"))
     assert document["effects"] == []
     assert document["unexplained"]["checks"] == ["residual_vs_temperature"]
     assert document["unexplained"]["best_candidate"] == "thermal_bias"

@@ -379,7 +379,7 @@ def test_the_json_contract(local_fleet):
     assert {"scheduler", "workers", "tasks"} <= set(result["compute"])
     (verdict,) = result["spec"]["verdict"]
     assert verdict.startswith("P(N < 0.25 deg/sqrt(h)) = ")
-    page = fleet_page(result)
+    page = fleet_page(local_fleet)
     assert "Specification" in page and "broken.csv" in page and page.count("<img") == 2
 
 

@@ -291,30 +291,39 @@ def test_matlab_script_sets_the_imusensor_properties(run_cli, tmp_path, recordin
 
 
 def test_posterior_means_are_exported_when_the_posterior_passed():
+    from types import SimpleNamespace
+
     from bayescal.report._export import (
         SensorNoise,
-        estimates_from_result,
         kalibr_yaml,
         matlab_script,
+        noise_estimates,
+    )
+    from bayescal.report._noise import NoiseAnalysis, Window
+
+    def reading(kind, value, low, high):
+        return bc.SlopeReading(value, low, high, 1.0, 0.0, kind, reason="no stretch")
+
+    def summary(mean, q05, q95):
+        return SimpleNamespace(mean=mean, q05=q05, q95=q95)
+
+    classical = SimpleNamespace(
+        slope_readings={
+            "N": reading("reading", 2.0, 1.5, 2.5),
+            "B": reading("upper_bound", None, None, 3.0),
+            "K": reading("upper_bound", None, None, 5.0),
+        },
+        allan=SimpleNamespace(confidence=0.95),
     )
 
-    readings = {
-        "N": {"kind": "reading", "value": 2.0, "ci_low": 1.5, "ci_high": 2.5},
-        "B": {"kind": "upper_bound", "value": None, "ci_low": None, "ci_high": 3.0},
-        "K": {"kind": "upper_bound", "value": None, "ci_low": None, "ci_high": 5.0},
-    }
-    result = {
-        "classical": {"slope_readings": readings, "allan": {"confidence": 0.95}},
-        "bayesian": {
-            "interval": 0.9,
-            "diagnostics": {"passed": True},
-            "parameters": {
-                "N": {"mean": 2.1, "q05": 2.0, "q95": 2.2},
-                "K": {"mean": 0.4, "q05": 0.1, "q95": 0.8},
-            },
-        },
-    }
-    estimates = estimates_from_result(result, to_si=10.0)
+    def analysis(passed: bool) -> NoiseAnalysis:
+        noise = SimpleNamespace(
+            diagnostics=SimpleNamespace(passed=passed),
+            parameters={"N": summary(2.1, 2.0, 2.2), "K": summary(0.4, 0.1, 0.8)},
+        )
+        return NoiseAnalysis("x.bag", "gyro_y", "rad/s", Window(0.0, 1.0), classical, noise)
+
+    estimates = noise_estimates(analysis(True), to_si=10.0)
     assert estimates["N"].value == pytest.approx(21.0) and estimates["N"].how == "posterior mean"
     assert estimates["K"].value == pytest.approx(4.0)
     assert estimates["B"].value == pytest.approx(30.0) and "upper bound" in estimates["B"].how
@@ -330,8 +339,7 @@ def test_posterior_means_are_exported_when_the_posterior_passed():
     )
     assert "accel.TemperatureBias = 1.000000000e-04;" in script
 
-    result["bayesian"]["diagnostics"]["passed"] = False
-    fallback = estimates_from_result(result, to_si=1.0)
+    fallback = noise_estimates(analysis(False), to_si=1.0)
     assert fallback["N"].value == 2.0 and "failed its health checks" in fallback["N"].how
 
 

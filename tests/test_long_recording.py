@@ -244,8 +244,8 @@ def test_the_posterior_of_a_streamed_channel_is_the_in_memory_one(small_blocks, 
         for key in ("mean", "sd", "q05", "q95", "map"):
             assert close(summary[key], disk.summary[name][key]), (name, key)
     assert memory.passed == disk.passed
-    assert [c["p_value"] for c in memory.checks] == pytest.approx(
-        [c["p_value"] for c in disk.checks], rel=TOLERANCE
+    assert [c.p_value for c in memory.checks] == pytest.approx(
+        [c.p_value for c in disk.checks], rel=TOLERANCE
     )
 
 

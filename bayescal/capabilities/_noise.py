@@ -10,7 +10,7 @@ import numpy as np
 
 from .._errors import HealthCheckError, InputError
 from ..classical._noise import ClassicalNoise, classical_noise
-from ..inference._checks import noise_model_checker
+from ..inference._checks import FitCheck, noise_model_checker
 from ..inference._lines_posterior import SpectralLinesFit, lines_posterior
 from ..inference._noise_posterior import NoisePosterior, sample_noise
 from ..inference._priors import card_prior, default_prior
@@ -60,10 +60,10 @@ class NoiseFit:
     """Student-t bias, sd, Allan deviation with intervals, IEEE 952 readings."""
     fit: NoisePosterior = field(repr=False)
     """The posterior itself (draws, diagnostics, the likelihood's data)."""
-    checks: tuple = ()
+    checks: tuple[FitCheck, ...] = ()
     """The checks of the fitted model against the record (Allan deviation, spectrum in octave
     bands, lag-1 autocorrelation: :func:`~bayescal.inference._checks.noise_model_checker`),
-    each with its place, p-value and whether it passed."""
+    each a :class:`~bayescal.FitCheck` with its place, p-value and whether it passed."""
     selection: TermSelection | None = None
     """How the terms were chosen (``terms="auto"``): every candidate with its Bayes factor
     and why it was kept or left out; None for terms given."""
@@ -111,12 +111,12 @@ class NoiseFit:
     @property
     def fits(self) -> bool:
         """Whether the model fits the record: every check of :attr:`checks` passed."""
-        return all(check["passed"] for check in self.checks)
+        return all(check.passed for check in self.checks)
 
     @property
     def misfits(self) -> tuple[str, ...]:
         """Where the model does not fit the record, and by how much."""
-        return tuple(check["misfit"] for check in self.checks if not check["passed"])
+        return tuple(check.misfit for check in self.checks if not check.passed)
 
     @property
     def passed(self) -> bool:
@@ -205,7 +205,7 @@ class NoisePosteriorFit:
     """How the terms were chosen (``terms="auto"``), else None."""
     lsb: float
     """The resolution the samples are rounded to (zero: none), channel unit."""
-    checks: tuple[dict, ...]
+    checks: tuple[FitCheck, ...]
     """The posterior-predictive checks of the MAP against the record
     (:func:`~bayescal.inference._checks.noise_model_checker`)."""
     lines: SpectralLinesFit | None = None
@@ -219,7 +219,7 @@ def _with_what_is_left(checker: Callable, found: dict) -> Callable:
     if not extra:
         return checker
 
-    def check(model: NoiseModel) -> list[dict]:
+    def check(model: NoiseModel) -> list[FitCheck]:
         return checker(
             NoiseModel(model.rate_hz, model.bias, lsb=model.lsb, **model.values, **extra)
         )
@@ -261,7 +261,7 @@ def noise_posterior(
     selection, refused, chosen = None, {}, terms
 
     def misfit(model) -> str:
-        return "; ".join(check["misfit"] for check in checker(model) if not check["passed"])
+        return "; ".join(check.misfit for check in checker(model) if not check.passed)
 
     while True:
         if terms == AUTO:

@@ -15,6 +15,7 @@ from .._errors import HealthCheckError, InputError
 from ..classical._allan import allan_deviation
 from ..classical._gravity import LocalGravity
 from ..classical._two_position import Section, check_sections, classical_two_position
+from ..inference._checks import FitCheck
 from ..inference._mcmc import summarize
 from ..inference._noise_posterior import NoisePosterior
 from ..inference._priors import default_prior
@@ -35,7 +36,7 @@ class BayesianTwoPosition:
     map_values: dict
     map_sd: dict
     noise: NoisePosterior
-    checks: tuple = ()
+    checks: tuple[FitCheck, ...] = ()
     """The noise model's checks against the two sections (Allan deviation, spectrum, lag-1
     autocorrelation: :func:`~bayescal.inference._checks.noise_model_checker`)."""
     selection: TermSelection | None = None
@@ -44,7 +45,7 @@ class BayesianTwoPosition:
     @property
     def misfits(self) -> tuple[str, ...]:
         """Where the noise model does not fit the sections, and by how much."""
-        return tuple(check["misfit"] for check in self.checks if not check["passed"])
+        return tuple(check.misfit for check in self.checks if not check.passed)
 
 
 def bayesian_two_position(

@@ -141,6 +141,15 @@ class ClassicalNoise:
     t_interval: TIntervalCheck
     slope_readings: dict
 
+    @property
+    def widened_interval(self) -> tuple[float, float]:
+        """The Student-t interval of the bias widened about the mean by
+        ``t_interval.widening`` (the factor the samples' correlation calls for), U: what holds
+        when the t-interval does not."""
+        half_width = (self.bias_ci_high - self.bias_ci_low) / 2
+        widening = self.t_interval.widening
+        return self.bias - widening * half_width, self.bias + widening * half_width
+
 
 def student_t_interval(values, confidence: float) -> tuple[float, float, float]:
     """Mean and its two-sided Student-t interval, ignoring NaN (../shared/DESIGN.md).

@@ -522,10 +522,9 @@ def require_bayesian_run(channel, alternative: str | None = None) -> None:
         )
 
 
-def walker_note(diagnostics: dict, requested: int) -> list[str]:
-    """A note when the sampler ran more walkers than ``--walkers`` asked for."""
-    used = diagnostics.get("n_walkers")
-    if used is None or used == requested:
+def walker_note(used: int, requested: int) -> list[str]:
+    """A note when the sampler ran more walkers (``used``) than ``--walkers`` asked for."""
+    if used == requested:
         return []
     return [
         f"--walkers {requested} raised to {used}: emcee needs more than twice the model's "

@@ -130,13 +130,14 @@ def run(args) -> int:
     found = _discover(
         args, args.file, baseline, max_effects=args.max_effects, progress=talk, seed=args.seed
     )
-    from ..report._discovery import discovery_document, discovery_text, write_folder
+    from ..report._discovery import Findings, discovery_document, discovery_text, write_folder
 
-    document = discovery_document(found, source=str(args.file), simulation=simulation)
+    findings = Findings.of(found, source=str(args.file), simulation=simulation)
+    document = discovery_document(findings)
     if folder is not None:
-        write_folder(folder, found, document)
+        write_folder(folder, findings, document)
     if args.json:
         write_json(args.json, document)
-    print(discovery_text(document))
+    print(discovery_text(found))
     failures = [] if found.passed else list(found.posterior.diagnostics.failures)
     return health_exit("discover", [f"the final posterior: {f}" for f in failures])

@@ -177,8 +177,8 @@ def run(args) -> int:
             ),
             folder / f"{stem}_population.nc",
         )
-        write_atomic(folder / f"{stem}.html", fleet_page(result))
-    print(fleet_text(result))
+        write_atomic(folder / f"{stem}.html", fleet_page(fleet))
+    print(fleet_text(fleet))
     failures = [f"population: {failure}" for failure in fleet.failures]
     failures += [f"{f.source}: {f.message}" for f in fleet.failed if f.kind != "input"]
     code = health_exit("fleet", failures)

@@ -123,6 +123,6 @@ def run(args) -> int:
     )
     if args.json:
         write_json(args.json, result)
-    print(multi_position_text(result))
+    print(multi_position_text(calibration, channels=args.channels, notes=notes))
     failures = [] if calibration.passed else list(calibration.bayesian.diagnostics.failures)
     return health_exit("multi-position", failures)

@@ -201,7 +201,7 @@ def run(args) -> int:
     # The analysis's modules load once the input is known to be good.
     from ..classical._noise import classical_noise
     from ..report._export import plan_exports, write_exports
-    from ..report._noise import noise_result, noise_text
+    from ..report._noise import NoiseAnalysis, Window, noise_document, noise_text
 
     exports = plan_exports(args.export, channel.unit, name, channel.source, topic, args.export_axes)
     fit = None
@@ -228,19 +228,25 @@ def run(args) -> int:
             sampler=sampler(args),
         )
         classical = fit.classical
-    result = noise_result(fit or channel, classical, window, fit)
-    result["notes"] = window.pop("notes", []) + result["notes"]
-    if result.get("bayesian"):
-        result["notes"] += walker_note(result["bayesian"].get("diagnostics", {}), args.walkers)
+    described, window_notes = Window.described(window)
+    analysis = NoiseAnalysis.of(
+        fit or channel,
+        classical,
+        described,
+        fit,
+        notes=window_notes,
+        extra_notes=[] if fit is None else walker_note(fit.diagnostics.n_walkers, args.walkers),
+    )
+    result = noise_document(analysis)
     if args.json:
         write_json(args.json, result)
-    exported = write_exports(exports, result)
+    exported = write_exports(exports, analysis)
     if folder is not None:
         stem = f"noise_{file_stem(name)}"
         if fit is not None:
             write_netcdf(fit.posterior, folder / f"{stem}_posterior.nc")
         write_json(folder / f"{stem}.json", result)
-    print(noise_text(result))
+    print(noise_text(analysis))
     for line in exported:
         print(line)
     failures = [] if fit is None else [f"{name}: {failure}" for failure in fit.failures]

@@ -101,7 +101,7 @@ def _health(outcome, command: str) -> int:
 
 def run(args) -> int:
     from ..recording._columns import default_channels
-    from ..report._discovery import discovery_findings
+    from ..report._discovery import discover_channel
     from ..report._report import report_recording, summary_text
 
     (folder,) = declare_outputs([args.file], folders={"--out": args.out})
@@ -129,7 +129,7 @@ def run(args) -> int:
     if args.discover:
 
         def discoveries(recording, channel):
-            return discovery_findings(recording, channel, seed=args.seed)
+            return discover_channel(recording, channel, seed=args.seed)
 
     outcome = report_recording(
         recording,
@@ -159,8 +159,7 @@ def run(args) -> int:
     print(f"bayescal report: {recording.source}")
     print(summary_text(outcome))
     for analysis in outcome.analyses:
-        diagnostics = (analysis.result.get("bayesian") or {}).get("diagnostics", {})
-        for note in walker_note(diagnostics, args.walkers):
+        for note in walker_note(analysis.fit.diagnostics.n_walkers, args.walkers):
             print(f"  note: {analysis.channel}: {note}")
     return _health(outcome, "report")
 

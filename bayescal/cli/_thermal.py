@@ -214,7 +214,7 @@ def run_fit(args) -> int:
         sampler=sampler(args),
     )
     calibration.save(args.json)
-    print(thermal_text(calibration.to_document()))
+    print(thermal_text(calibration))
     return health_exit("thermal fit", [] if calibration.passed else calibration.failures)
 
 
@@ -327,7 +327,7 @@ def run_update(args) -> int:
         sampler=sampler(args),
     )
     updated.save(args.json)
-    print(thermal_text(updated.to_document()))
+    print(thermal_text(updated))
     return health_exit("thermal update", [] if updated.passed else updated.failures)
 
 

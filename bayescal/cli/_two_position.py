@@ -145,6 +145,6 @@ def run(args) -> int:
     result = two_position_result(calibration, found_by)
     if args.json:
         write_json(args.json, result)
-    print(two_position_text(result))
+    print(two_position_text(calibration, found_by))
     failures = list(calibration.failures)
     return health_exit("two-position", failures)

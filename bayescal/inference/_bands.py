@@ -16,6 +16,8 @@
   uses) and its predictive band (a bin's mean of k ordinates is Gamma(k) / k times it).
 """
 
+from dataclasses import asdict, dataclass
+
 import jax.numpy as jnp
 import numpy as np
 
@@ -25,6 +27,53 @@ from ._noise_posterior import NoisePosterior, noise_model
 
 BAND_LEVEL = 0.90
 BAND_DRAWS = 400
+
+
+@dataclass(frozen=True)
+class AllanBand:
+    """Posterior bands of the Allan deviation (:func:`allan_band`), pointwise at ``level``:
+    at the measured taus and on a fine grid (``fine_*``). ``expected_*``: quantiles over draws
+    of the model's exact deviation; ``predictive_*``: of the deviation a recording like this
+    one would measure."""
+
+    level: float
+    n_draws: int
+    tau_s: np.ndarray
+    predictive_low: np.ndarray
+    predictive_high: np.ndarray
+    expected_low: np.ndarray
+    expected_median: np.ndarray
+    expected_high: np.ndarray
+    fine_tau_s: np.ndarray
+    fine_expected_low: np.ndarray
+    fine_expected_median: np.ndarray
+    fine_expected_high: np.ndarray
+
+    def as_dict(self, unit: str) -> dict:
+        """The band as the report's JSON holds it, with the channel's ``unit``."""
+        return {**asdict(self), "unit": unit}
+
+
+@dataclass(frozen=True)
+class SpectrumBand:
+    """The binned periodogram the likelihood fits and the model's expected periodogram over
+    posterior draws (:func:`spectrum_band`), as two-sided amplitude spectral densities of the
+    samples, pointwise at ``level``."""
+
+    level: float
+    frequency_hz: np.ndarray
+    frequencies_per_bin: np.ndarray
+    measured_asd: np.ndarray
+    expected_median: np.ndarray
+    expected_low: np.ndarray
+    expected_high: np.ndarray
+    predictive_low: np.ndarray
+    predictive_high: np.ndarray
+
+    def as_dict(self, unit: str) -> dict:
+        """The band as the report's JSON holds it, with the channel's ``unit`` (the density's:
+        unit/sqrt(Hz))."""
+        return {**asdict(self), "unit": unit}
 
 
 def draw_subset(fit: NoisePosterior, count: int, seed: int) -> dict[str, np.ndarray]:
@@ -56,7 +105,7 @@ def allan_band(
     draws: int = BAND_DRAWS,
     level: float = BAND_LEVEL,
     seed: int = 0,
-) -> dict:
+) -> AllanBand:
     """Posterior bands of the Allan deviation at the measured taus and on a fine grid.
 
     ``expected_*``: quantiles over draws of the model's exact ADEV (parameter uncertainty);
@@ -77,25 +126,25 @@ def allan_band(
     rng = np.random.default_rng(seed + 1)
     scatter = rng.chisquare(edf[None, :], size=expected.shape) / edf[None, :]
     predictive = expected * np.sqrt(scatter)
-    return {
-        "level": level,
-        "n_draws": int(expected.shape[0]),
-        "tau_s": tau,
-        "predictive_low": np.quantile(predictive, low_q, axis=0),
-        "predictive_high": np.quantile(predictive, high_q, axis=0),
-        "expected_low": np.quantile(expected, low_q, axis=0),
-        "expected_median": np.quantile(expected, 0.5, axis=0),
-        "expected_high": np.quantile(expected, high_q, axis=0),
-        "fine_tau_s": fine,
-        "fine_expected_low": np.quantile(expected_fine, low_q, axis=0),
-        "fine_expected_median": np.quantile(expected_fine, 0.5, axis=0),
-        "fine_expected_high": np.quantile(expected_fine, high_q, axis=0),
-    }
+    return AllanBand(
+        level=level,
+        n_draws=int(expected.shape[0]),
+        tau_s=tau,
+        predictive_low=np.quantile(predictive, low_q, axis=0),
+        predictive_high=np.quantile(predictive, high_q, axis=0),
+        expected_low=np.quantile(expected, low_q, axis=0),
+        expected_median=np.quantile(expected, 0.5, axis=0),
+        expected_high=np.quantile(expected, high_q, axis=0),
+        fine_tau_s=fine,
+        fine_expected_low=np.quantile(expected_fine, low_q, axis=0),
+        fine_expected_median=np.quantile(expected_fine, 0.5, axis=0),
+        fine_expected_high=np.quantile(expected_fine, high_q, axis=0),
+    )
 
 
 def spectrum_band(
     fit: NoisePosterior, *, draws: int = BAND_DRAWS, level: float = BAND_LEVEL, seed: int = 0
-) -> dict:
+) -> SpectrumBand:
     """The binned periodogram the likelihood fits and the model's expected periodogram, as
     two-sided amplitude spectral densities of the samples (white noise reads N)."""
     spectral = fit.problem.spectral
@@ -124,14 +173,14 @@ def spectrum_band(
     def asd(values):
         return np.sqrt(np.maximum(values * to_samples, 0.0))[..., order]
 
-    return {
-        "level": level,
-        "frequency_hz": frequency[order],
-        "frequencies_per_bin": count[order],
-        "measured_asd": asd(measured),
-        "expected_median": np.quantile(asd(expected), 0.5, axis=0),
-        "expected_low": np.quantile(asd(expected), low_q, axis=0),
-        "expected_high": np.quantile(asd(expected), high_q, axis=0),
-        "predictive_low": np.quantile(asd(predictive), low_q, axis=0),
-        "predictive_high": np.quantile(asd(predictive), high_q, axis=0),
-    }
+    return SpectrumBand(
+        level=level,
+        frequency_hz=frequency[order],
+        frequencies_per_bin=count[order],
+        measured_asd=asd(measured),
+        expected_median=np.quantile(asd(expected), 0.5, axis=0),
+        expected_low=np.quantile(asd(expected), low_q, axis=0),
+        expected_high=np.quantile(asd(expected), high_q, axis=0),
+        predictive_low=np.quantile(asd(predictive), low_q, axis=0),
+        predictive_high=np.quantile(asd(predictive), high_q, axis=0),
+    )

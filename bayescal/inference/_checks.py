@@ -11,6 +11,7 @@ when its p-value is below ``CHECK_LEVEL``.
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import fft, stats
@@ -50,7 +51,13 @@ def allan_check(
     dominates at each tau. The band is the model's: its EDF for that noise type, not for a type
     identified from the data (unreliable from a few long averages). ``allan``: that deviation
     at octave taus, and ``count`` the residual's present samples, when already known (a long
-    record's each cost a pass over it)."""
+    record's each cost a pass over it).
+
+    Its ``curve`` holds what a figure of it draws: the measured deviation, the model's 90 %
+    band at each tau (``model_low``, ``model_high``: pointwise, so about one point in ten lies
+    outside by chance) and the check's own bounds (``check_low``, ``check_high``: the band at
+    the Bonferroni-corrected level CHECK_LEVEL / taus, two-sided), outside which a point fails
+    the check."""
     if allan is None:
         allan = allan_deviation(residual, rate_hz, "octave")
     finite = np.isfinite(allan.deviation)
@@ -66,7 +73,15 @@ def allan_check(
             "p_value": 1.0,
             "location": {"untested": "no tau with a measured Allan deviation and a model's"},
             "unit": unit,
-            "curve": {"tau_s": [], "adev": [], "model_low": [], "model_high": []},
+            "curve": {
+                "tau_s": [],
+                "adev": [],
+                "model": [],
+                "model_low": [],
+                "model_high": [],
+                "check_low": [],
+                "check_high": [],
+            },
         }
     tau, deviation, predicted = allan.tau[usable], allan.deviation[usable], predicted[usable]
     n_phase = (finite_moments(residual)[0] if count is None else count) + 1
@@ -90,6 +105,11 @@ def allan_check(
             excess = np.sqrt(np.maximum(deviation[flagged] ** 2 - predicted[flagged], 1e-300))
             slope = np.polyfit(np.log(tau[flagged]), np.log(excess), 1)[0]
             location["excess_slope"] = float(slope)
+    tail = CHECK_LEVEL / usable.sum() / 2  # a point whose p_each * taus < CHECK_LEVEL fails
+
+    def bound(probability):
+        return np.sqrt(predicted * stats.chi2.ppf(probability, edf) / edf).tolist()
+
     return {
         "name": "allan_deviation",
         "statistic": float(np.max(np.abs(np.log(ratio)))),
@@ -99,8 +119,11 @@ def allan_check(
         "curve": {
             "tau_s": tau.tolist(),
             "adev": deviation.tolist(),
-            "model_low": np.sqrt(predicted * stats.chi2.ppf(0.05, edf) / edf).tolist(),
-            "model_high": np.sqrt(predicted * stats.chi2.ppf(0.95, edf) / edf).tolist(),
+            "model": np.sqrt(predicted).tolist(),
+            "model_low": bound(0.05),
+            "model_high": bound(0.95),
+            "check_low": bound(tail),
+            "check_high": bound(1 - tail),
         },
     }
 
@@ -417,7 +440,64 @@ def _lag_one(sums: dict, autocovariance: np.ndarray) -> dict:
     }
 
 
-def noise_model_checker(summary, values, unit: str, allan=None) -> Callable[..., list[dict]]:
+@dataclass(frozen=True)
+class FitCheck:
+    """One check of a fitted noise model against its record (:func:`noise_model_checker`):
+    whether the record looks like a draw from the model there.
+
+    Attributes
+    ----------
+    name : str
+        The check: ``allan_deviation`` (the measured overlapping Allan deviation within the
+        model's band, the model's own EDF at each tau), ``spectrum_bands`` (the binned
+        periodogram in octave bands) or ``lag_one_autocorrelation`` (the increments').
+    statistic : float
+        Its statistic at the worst place (as the check defines it).
+    p_value : float
+        Its p-value, Bonferroni-corrected over the places it looked.
+    location : dict
+        Where it looked worst: a tau and the measured over the model's Allan deviation, a
+        frequency band and its power over the model's, the lag-1 autocorrelations.
+    passed : bool
+        Whether the model fits there: the departure is not both significant (p below
+        ``CHECK_LEVEL`` = 0.01) and material (beyond 10 % in Allan deviation, 20 % in a band's
+        power, 0.05 in the lag-1 autocorrelation).
+    misfit : str
+        Where and by how much the model misfits, in words (empty when it passed).
+    curve : dict
+        What a figure of the check draws (the Allan deviation's: ``tau_s``, ``adev``, the
+        model's ``model``, its pointwise 90 % band ``model_low``/``model_high`` and the
+        check's bounds ``check_low``/``check_high``, outside which a point fails it); empty
+        for the other checks. Not part of the JSON.
+    """
+
+    name: str
+    statistic: float
+    p_value: float
+    location: dict
+    passed: bool
+    misfit: str
+    curve: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def as_dict(self) -> dict:
+        """The check as the JSON documents hold it (``fit_checks``).
+
+        Returns
+        -------
+        dict
+            ``name``, ``statistic``, ``p_value``, ``location``, ``passed``, ``misfit``.
+        """
+        return {
+            "name": self.name,
+            "statistic": self.statistic,
+            "p_value": self.p_value,
+            "location": self.location,
+            "passed": self.passed,
+            "misfit": self.misfit,
+        }
+
+
+def noise_model_checker(summary, values, unit: str, allan=None) -> Callable[..., list[FitCheck]]:
     """model -> the checks of a stationary noise model (a :class:`~bayescal.NoiseModel`, at a
     posterior's MAP) against ``values``, its record (``summary`` their spectral summary,
     ``allan`` their Allan deviation at octave taus when already computed): the Allan deviation
@@ -437,7 +517,7 @@ def noise_model_checker(summary, values, unit: str, allan=None) -> Callable[...,
     count = finite_moments(values)[0]
     increments = _increment_sums(values)
 
-    def check(model) -> list[dict]:
+    def check(model) -> list[FitCheck]:
         weights = model.whittle_weights(summary)
         expected = np.asarray(expected_power(summary, *weights)) / summary.count
         checks = [
@@ -453,13 +533,35 @@ def noise_model_checker(summary, values, unit: str, allan=None) -> Callable[...,
             spectrum_check(summary, summary.power / expected, expected),
             _lag_one(increments, model.increment_autocovariance(np.arange(64))),
         ]
+        found = []
         for one in checks:
             material = _material(one)
-            one["passed"] = bool(one["p_value"] >= CHECK_LEVEL or not material)
-            one["misfit"] = "" if one["passed"] else material
-        return checks
+            passed = bool(one["p_value"] >= CHECK_LEVEL or not material)
+            found.append(
+                FitCheck(
+                    name=one["name"],
+                    statistic=one["statistic"],
+                    p_value=one["p_value"],
+                    location=one["location"],
+                    passed=passed,
+                    misfit="" if passed else material,
+                    curve=_tolerated(one.get("curve", {})),
+                )
+            )
+        return found
 
     return check
+
+
+def _tolerated(curve: dict) -> dict:
+    """An Allan check's curve with its bounds widened to the tolerance: a departure within
+    ADEV_TOLERANCE of the model's deviation is no misfit, however significant."""
+    if not curve.get("model"):
+        return dict(curve)
+    model = np.asarray(curve["model"])
+    low = np.minimum(curve["check_low"], (1 - ADEV_TOLERANCE) * model)
+    high = np.maximum(curve["check_high"], (1 + ADEV_TOLERANCE) * model)
+    return {**curve, "check_low": low.tolist(), "check_high": high.tolist()}
 
 
 def _material(check: dict) -> str:

@@ -9,7 +9,7 @@ from .._output import staged, write_csv, write_json
 from ..capabilities._demo import DEMO_CHANNELS, DEMO_SENSOR, DISCOVERY_BASELINE, demo_recording
 from ..inference._sampler import Sampler
 from ..recording._recording import load_recording
-from ._discovery import discovery_findings
+from ._discovery import discover_channel
 from ._report import ReportOutcome, report_recording
 
 
@@ -32,7 +32,7 @@ def write_demo(
         where nothing is."""
         if not channel.channel.startswith("gyro"):
             return None
-        return discovery_findings(recording, channel, seed=seed, baseline=DISCOVERY_BASELINE)
+        return discover_channel(recording, channel, seed=seed, baseline=DISCOVERY_BASELINE)
 
     outcome = report_recording(
         recording,

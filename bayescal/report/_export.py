@@ -60,6 +60,7 @@ from pathlib import Path
 from .._errors import InputError
 from .._output import Outputs, check_writable, to_jsonable, write_atomic
 from ..recording._units import parse_unit
+from ._noise import INTERVAL, NoiseAnalysis, read_at
 
 FORMATS = ("kalibr", "matlab")
 SENSORS = ("accelerometer", "gyroscope")
@@ -144,42 +145,42 @@ def sensor_of_unit(unit: str, channel: str, source: str | None = None) -> tuple[
     return sensor, parsed.to_si
 
 
-def estimates_from_result(result: dict, to_si: float) -> dict[str, Estimate]:
-    """N, K and B of a ``bayescal noise`` result in SI units: posterior means when the
-    posterior passed its checks, else the classical slope readings."""
-    bayesian = result.get("bayesian")
+def noise_estimates(analysis: NoiseAnalysis, to_si: float) -> dict[str, Estimate]:
+    """N, K and B of a channel's noise (:class:`~bayescal.report._noise.NoiseAnalysis`) in SI
+    units: posterior means when the posterior passed its checks, else the classical slope
+    readings."""
+    noise = analysis.noise
     parameters = {}
-    if bayesian is not None and bayesian["diagnostics"]["passed"]:
-        parameters = bayesian["parameters"]
-    failed = bayesian is not None and not bayesian["diagnostics"]["passed"]
+    if noise is not None and noise.diagnostics.passed:
+        parameters = noise.parameters
+    failed = noise is not None and not noise.diagnostics.passed
     estimates = {}
     for name in ("N", "K", "B"):
         if name in parameters:
-            entry = parameters[name]
+            summary = parameters[name]
             estimates[name] = Estimate(
-                entry["mean"] * to_si,
+                summary.mean * to_si,
                 "posterior mean",
-                (entry["q05"] * to_si, entry["q95"] * to_si),
-                bayesian["interval"],
+                (summary.q05 * to_si, summary.q95 * to_si),
+                INTERVAL,
             )
             continue
-        reading = result["classical"]["slope_readings"].get(name)
+        reading = analysis.classical.slope_readings.get(name)
         why = " (the posterior failed its health checks)" if failed else ""
         if reading is None:
             estimates[name] = Estimate(None, "not estimated")
-        elif reading["kind"] == "reading" and reading["value"] is not None:
-            low, high = reading["ci_low"], reading["ci_high"]
+        elif reading.kind == "reading" and reading.value is not None:
+            low, high = reading.ci_low, reading.ci_high
             interval = (low * to_si, high * to_si) if None not in (low, high) else None
             estimates[name] = Estimate(
-                reading["value"] * to_si,
+                reading.value * to_si,
                 f"classical Allan slope reading{why}",
                 interval,
-                result["classical"]["allan"]["confidence"],
+                analysis.classical.allan.confidence,
             )
-        elif reading["ci_high"] is not None:
+        elif reading.ci_high is not None:
             estimates[name] = Estimate(
-                reading["ci_high"] * to_si,
-                f"classical upper bound ({reading.get('read_at', 'no stretch of its slope')}){why}",
+                reading.ci_high * to_si, f"classical upper bound ({read_at(reading)}){why}"
             )
         else:
             estimates[name] = Estimate(None, "not estimated")
@@ -291,18 +292,18 @@ def _locked(path: Path):
         yield
 
 
-def write_exports(plans: list[_Plan], result: dict) -> list[str]:
-    """Write every planned export from a ``bayescal noise`` result; one line per file. Each
+def write_exports(plans: list[_Plan], analysis: NoiseAnalysis) -> list[str]:
+    """Write every planned export of a channel's noise; one line per file. Each
     file is read again and rewritten under a lock, so that runs exporting other axes or the
     other sensor to it at the same time add to it rather than overwrite one another."""
     lines = []
     for plan in plans:
         noise = SensorNoise(
             plan.sensor,
-            result["channel"],
-            result["source"],
-            result["rate_hz"],
-            estimates_from_result(result, plan.to_si),
+            analysis.channel,
+            analysis.source,
+            analysis.classical.rate_hz,
+            noise_estimates(analysis, plan.to_si),
         )
         argument = f"--export {plan.format}"
         with _locked(plan.path):

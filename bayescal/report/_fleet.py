@@ -1,6 +1,9 @@
-"""A fleet's population as the JSON document of ``bayescal fleet``, the text it prints, and
-its page: the population with each unit's interval beside it, the specification's verdict,
-the units the population does not predict, the recordings left out, where the work ran.
+"""A fleet's population as the JSON document of ``bayescal fleet`` (:func:`fleet_result`),
+the text it prints (:func:`fleet_text`) and its page (:func:`fleet_page`): the population
+with each unit's interval beside it, the specification's verdict, the units the population
+does not predict, the recordings left out, where the work ran. All three read the
+:class:`~bayescal.FleetFit` (its :attr:`~bayescal.FleetFit.summary` for the figures with
+their intervals), never the document.
 
 JSON keys (the contract the checks read; ../shared/DESIGN.md "Fleets"):
 ``population.<param>.median`` and ``population.<param>.log_sd`` for each noise scale in the
@@ -19,7 +22,8 @@ from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN
 from ..inference._population import MIN_POINT_ESS, RESOLVED_LOG_SD
 from ..models._population import BIAS_SD_PRIOR_FACTOR, LOG_SD_PRIOR_SCALE
 from ..models._terms import parameter_unit
-from ._html import _STYLE, _esc, _image, _interval, _new_figure, _num, _png, pretty_unit
+from ._figures import embedded, new_figure
+from ._format import STYLE, esc, interval, num, pretty_unit
 
 _NAMES = {"N": "N white noise", "B": "B bias instability", "K": "K rate random walk"}
 
@@ -73,6 +77,12 @@ def spec_verdict(spec: dict | None) -> list[str]:
     return lines
 
 
+def _effective_points(fleet: FleetFit) -> dict[str, float]:
+    """unit -> effective number of its points behind the population (importance weights)."""
+    posterior = fleet.population
+    return dict(zip(posterior.units, map(float, posterior.point_ess), strict=True))
+
+
 def fleet_result(fleet: FleetFit) -> dict:
     """The JSON document of ``bayescal fleet`` (module docstring)."""
     summary = fleet.summary
@@ -85,9 +95,7 @@ def fleet_result(fleet: FleetFit) -> dict:
         "steps_per_autocorrelation_time": AUTOCORR_MULTIPLE,
         "min_effective_points_per_unit": MIN_POINT_ESS,
     }
-    diagnostics["effective_points"] = dict(
-        zip(posterior.units, map(float, posterior.point_ess), strict=True)
-    )
+    diagnostics["effective_points"] = _effective_points(fleet)
     diagnostics["effective_combined_draws"] = dict(
         zip(posterior.units, map(float, posterior.combined_ess), strict=True)
     )
@@ -158,20 +166,29 @@ def _number(value) -> str:
     return "n/a" if value is None else f"{value:.4g}"
 
 
-def fleet_text(result: dict) -> str:
-    """The table ``bayescal fleet`` prints, made from its JSON document."""
-    compute = result["compute"]
+def _flagged(fleet: FleetFit) -> dict[str, list[str]]:
+    """unit -> the parameters the population fitted without it does not predict."""
+    units = fleet.summary["outliers"].get("units", {})
+    return {unit: entry["flagged"] for unit, entry in units.items() if entry["flagged"]}
+
+
+def fleet_text(fleet: FleetFit) -> str:
+    """The table ``bayescal fleet`` prints.
+
+    Over 80 lines: the table's blocks in the order printed (the population, the
+    specification, the units, the outliers, the recordings left out, the checks)."""
+    compute, summary = fleet.compute, fleet.summary
     lines = [
-        f"bayescal fleet: {result['manifest']}, channel {result['channel']} [{result['unit']}]",
-        f"  {result['n_units']} units, {result['n_recordings']} recordings fitted "
-        f"({len(result['failed'])} left out); terms {', '.join(result['terms'])}",
+        f"bayescal fleet: {fleet.source}, channel {fleet.channel} [{fleet.unit}]",
+        f"  {len(fleet.units)} units, {len(fleet.recordings)} recordings fitted "
+        f"({len(fleet.failed)} left out); terms {', '.join(fleet.terms)}",
         f"  compute: {compute['tasks']} tasks on {compute['workers']} workers at "
         f"{compute['scheduler']} ({compute['cluster']}), {compute['wall_s']:.0f} s",
         "",
         "  population (posterior mean [90% interval])",
     ]
-    population = result["population"]
-    for name in result["model"]["parameters"]:
+    population = summary["population"]
+    for name in fleet.parameters:
         entry = population[name]
         lines.append(f"  {name:<6}median    {_entry(entry['median'])}")
         for label, shown in entry["display"].items():
@@ -189,42 +206,39 @@ def fleet_text(result: dict) -> str:
         f"        run sd    {_entry(bias['run_to_run_sd'])}",
         f"        next unit {_entry(bias['predictive'])}",
     ]
-    if "spec" in result:
-        lines += ["", "  specification"] + [f"  {line}" for line in result["spec"]["verdict"]]
-        lines += [f"    {limit['label']}: {limit['source']}" for limit in result["spec"]["limits"]]
+    spec = summary["spec"]
+    if spec is not None:
+        lines += ["", "  specification"] + [f"  {line}" for line in spec_verdict(spec)]
+        lines += [f"    {limit['label']}: {limit['source']}" for limit in spec["limits"]]
     lines += ["", "  units (shrunk toward the population; own: the unit's runs alone)"]
-    for unit, entry in result["units"].items():
+    for unit, entry in summary["units"].items():
         parts = [
             f"{name} {_number(entry[name]['mean'])} (own {_number(entry[name]['own']['mean'])})"
-            for name in (*result["model"]["parameters"], "bias")
+            for name in (*fleet.parameters, "bias")
         ]
         lines.append(f"  {unit}: {len(entry['runs'])} run(s); " + "; ".join(parts))
-    flagged = {
-        unit: entry["flagged"]
-        for unit, entry in result["outliers"].get("units", {}).items()
-        if entry["flagged"]
-    }
+    flagged = _flagged(fleet)
     if flagged:
         lines += ["", "  outliers (the population fitted without them does not predict them):"]
         lines += [f"  - {unit}: {', '.join(names)}" for unit, names in flagged.items()]
-    if result["failed"]:
+    if fleet.failed:
         lines += ["", "  recordings left out:"]
-        lines += [f"  - {f['source']} ({f['kind']}): {f['message']}" for f in result["failed"]]
-    if result["passed"]:
-        diagnostics = result["diagnostics"]
+        lines += [f"  - {f.source} ({f.kind}): {f.message}" for f in fleet.failed]
+    if fleet.passed:
+        diagnostics = fleet.population.diagnostics
         lines += [
             "",
-            f"  population posterior checks passed: {diagnostics['n_steps']} steps x "
-            f"{diagnostics['n_walkers']} walkers, ESS >= "
-            f"{min(diagnostics['ess_bulk'].values()):.0f}, R-hat <= "
-            f"{max(diagnostics['rhat'].values()):.3f}, effective points per unit >= "
-            f"{min(diagnostics['effective_points'].values()):.0f}",
+            f"  population posterior checks passed: {diagnostics.n_steps} steps x "
+            f"{diagnostics.n_walkers} walkers, ESS >= "
+            f"{min(diagnostics.ess_bulk.values()):.0f}, R-hat <= "
+            f"{max(diagnostics.rhat.values()):.3f}, effective points per unit >= "
+            f"{min(_effective_points(fleet).values()):.0f}",
         ]
     else:
         lines += ["", "  POPULATION CHECKS FAILED — do not use these numbers:"]
-        lines += [f"    - {failure}" for failure in result["failures"]]
-    if result["notes"]:
-        lines += ["", "  notes:"] + [f"  - {note}" for note in result["notes"]]
+        lines += [f"    - {failure}" for failure in fleet.failures]
+    if fleet.notes:
+        lines += ["", "  notes:"] + [f"  - {note}" for note in fleet.notes]
     return "\n".join(lines)
 
 
@@ -232,17 +246,17 @@ def fleet_text(result: dict) -> str:
 # The page
 
 
-def _units_figure(result: dict, name: str) -> str:
-    """Each unit's 90 % interval (shrunk, and its own in grey) beside the population's median
-    and the 90 % predictive range of the next unit."""
-    units = result["units"]
-    entry = result["population"][name]
-    unit = entry["median"]["unit"] if name != "bias" else result["unit"]
-    figure, (axes,) = _new_figure(7.2, 0.9 + 0.28 * len(units))
+def units_figure(fleet: FleetFit, name: str):
+    """Each unit's 90 % interval of ``name`` (shrunk, and its own in grey) beside the
+    population's median (mean, for the bias) and the 90 % predictive range of the next
+    unit."""
+    summary = fleet.summary
+    units = summary["units"]
+    entry = summary["population"][name]
+    unit = entry["median"]["unit"] if name != "bias" else fleet.unit
+    figure, (axes,) = new_figure(7.2, 0.9 + 0.28 * len(units))
     positions = np.arange(len(units))[::-1]
-    flagged = {
-        u for u, e in result["outliers"].get("units", {}).items() if name in e.get("flagged", [])
-    }
+    flagged = {u for u, names in _flagged(fleet).items() if name in names}
     for y, (unit_id, values) in zip(positions, units.items(), strict=True):
         own, shrunk = values[name]["own"], values[name]
         axes.plot([own["q05"], own["q95"]], [y + 0.15] * 2, color="0.6", lw=2)
@@ -268,25 +282,26 @@ def _units_figure(result: dict, name: str) -> str:
         + "; dashed, next unit 90 %",
         fontsize=8,
     )
-    return _image(_png(figure), f"{name} of each unit beside the population")
+    return figure
 
 
-def _population_table(result: dict) -> str:
+def _population_table(fleet: FleetFit) -> str:
+    population = fleet.summary["population"]
     rows = []
-    for name in result["model"]["parameters"]:
-        entry = result["population"][name]
+    for name in fleet.parameters:
+        entry = population[name]
         display = "".join(
-            f"<br><span class='note'>{_num(shown['mean'])} [{_num(shown['q05'])}, "
-            f"{_num(shown['q95'])}] {_esc(pretty_unit(label))}</span>"
+            f"<br><span class='note'>{num(shown['mean'])} [{num(shown['q05'])}, "
+            f"{num(shown['q95'])}] {esc(pretty_unit(label))}</span>"
             for label, shown in entry["display"].items()
             if shown["mean"] is not None
         )
         rows.append(
-            f"<tr><td>{_esc(_NAMES[name])}</td><td class='num'>{_cell(entry['median'])}"
+            f"<tr><td>{esc(_NAMES[name])}</td><td class='num'>{_cell(entry['median'])}"
             f"{display}</td><td class='num'>{_cell(entry['log_sd'])}</td>"
             f"<td class='num'>{_cell(entry['predictive'])}</td></tr>"
         )
-    bias = result["population"]["bias"]
+    bias = population["bias"]
     rows.append(
         f"<tr><td>turn-on bias</td><td class='num'>mean {_cell(bias['mean'])}</td>"
         f"<td class='num'>unit-to-unit sd {_cell(bias['unit_to_unit_sd'])}<br>run-to-run sd "
@@ -301,116 +316,117 @@ def _population_table(result: dict) -> str:
 
 def _cell(entry: dict) -> str:
     if entry.get("mean") is None:
-        return f"n/a <span class='note'>({_esc(entry.get('note', ''))})</span>"
-    return _interval(entry["mean"], entry["q05"], entry["q95"], entry["unit"])
+        return f"n/a <span class='note'>({esc(entry.get('note', ''))})</span>"
+    return interval(entry["mean"], entry["q05"], entry["q95"], entry["unit"])
 
 
-def fleet_page(result: dict) -> str:
-    """The self-contained HTML page of a fleet, from its JSON document."""
+def _spec_html(spec: dict) -> list[str]:
+    parts = ["<h2>Specification</h2><ul>"]
+    parts += [f"<li><b>{esc(line)}</b></li>" for line in spec_verdict(spec)]
+    parts.append("</ul><p class='note'>Limits: ")
+    parts.append(
+        "; ".join(f"{esc(limit['label'])} ({esc(limit['source'])})" for limit in spec["limits"])
+    )
+    parts.append(f". All limits: {esc(spec['all']['definition'])}.</p>")
+    failing = {unit: p for unit, p in spec["all"]["units"].items() if p < 0.5}
+    if failing:
+        parts.append(
+            "<p class='bad'>Units more likely than not to miss the limits: "
+            + ", ".join(f"{esc(u)} (P = {p:.2f})" for u, p in failing.items())
+            + "</p>"
+        )
+    return parts
+
+
+def fleet_page(fleet: FleetFit) -> str:
+    """The self-contained HTML page of a fleet.
+
+    Over 80 lines: the page's sections in order (the alarms, the population, the
+    specification, the units, the checks and where the work ran)."""
     created = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    title = f"Fleet {result['manifest']}: {result['channel']}"
+    title = f"Fleet {fleet.source}: {fleet.channel}"
+    summary = fleet.summary
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{_esc(title)}</title><style>{_STYLE}</style></head><body>",
-        f"<h1>{_esc(title)}</h1>",
-        f"<p class='note'>{result['n_units']} units, {result['n_recordings']} recordings, "
-        f"unit {_esc(result['unit'])}, terms {_esc(', '.join(result['terms']))} — bayescal "
-        f"{_esc(result['bayescal_version'])}, {created}</p>",
+        f"<title>{esc(title)}</title><style>{STYLE}</style></head><body>",
+        f"<h1>{esc(title)}</h1>",
+        f"<p class='note'>{len(fleet.units)} units, {len(fleet.recordings)} recordings, "
+        f"unit {esc(fleet.unit)}, terms {esc(', '.join(fleet.terms))} — bayescal "
+        f"{esc(version('bayescal'))}, {created}</p>",
     ]
-    if not result["passed"]:
+    if not fleet.passed:
         parts.append(
             "<div class='alarm'><h2>HEALTH CHECK FAILED</h2><p>The population's posterior "
             "failed its checks; do not use these numbers:</p><ul>"
-            + "".join(f"<li>{_esc(failure)}</li>" for failure in result["failures"])
+            + "".join(f"<li>{esc(failure)}</li>" for failure in fleet.failures)
             + "</ul></div>"
         )
-    if result["failed"]:
+    if fleet.failed:
         parts.append(
             "<div class='alarm'><h2>Recordings left out</h2><ul>"
             + "".join(
-                f"<li><code>{_esc(f['source'])}</code> (unit {_esc(f['unit'])}, run "
-                f"{_esc(f['run'])}, {_esc(f['kind'])}): {_esc(f['message'])}</li>"
-                for f in result["failed"]
+                f"<li><code>{esc(f.source)}</code> (unit {esc(f.unit)}, run "
+                f"{esc(f.run)}, {esc(f.kind)}): {esc(f.message)}</li>"
+                for f in fleet.failed
             )
             + "</ul></div>"
         )
-    parts += ["<h2>Population</h2>", _population_table(result)]
-    if "spec" in result:
-        parts.append("<h2>Specification</h2><ul>")
-        parts += [f"<li><b>{_esc(line)}</b></li>" for line in result["spec"]["verdict"]]
-        parts.append("</ul><p class='note'>Limits: ")
-        parts.append(
-            "; ".join(
-                f"{_esc(limit['label'])} ({_esc(limit['source'])})"
-                for limit in result["spec"]["limits"]
-            )
-        )
-        parts.append(f". All limits: {_esc(result['spec']['all']['definition'])}.</p>")
-        failing = {unit: p for unit, p in result["spec"]["all"]["units"].items() if p < 0.5}
-        if failing:
-            parts.append(
-                "<p class='bad'>Units more likely than not to miss the limits: "
-                + ", ".join(f"{_esc(u)} (P = {p:.2f})" for u, p in failing.items())
-                + "</p>"
-            )
-    flagged = {
-        unit: entry["flagged"]
-        for unit, entry in result["outliers"].get("units", {}).items()
-        if entry["flagged"]
-    }
+    parts += ["<h2>Population</h2>", _population_table(fleet)]
+    if summary["spec"] is not None:
+        parts += _spec_html(summary["spec"])
+    flagged = _flagged(fleet)
     parts.append("<h2>Units</h2>")
+    outliers = summary["outliers"]
     if flagged:
         parts.append(
             "<p class='bad'>Outliers — units the population, fitted without them, does not "
             "predict (in red): "
-            + "; ".join(f"{_esc(u)} ({_esc(', '.join(n))})" for u, n in flagged.items())
+            + "; ".join(f"{esc(u)} ({esc(', '.join(n))})" for u, n in flagged.items())
             + "</p>"
         )
-    elif result["outliers"].get("threshold") is not None:
+    elif outliers.get("threshold") is not None:
         parts.append(
             "<p class='ok'>No outlier: the population predicts every unit (two-sided tail "
-            f"probability above {_num(result['outliers']['threshold'], 2)} for each).</p>"
+            f"probability above {num(outliers['threshold'], 2)} for each).</p>"
         )
-    for name in (*result["model"]["parameters"], "bias"):
-        parts.append(_units_figure(result, name))
+    for name in (*fleet.parameters, "bias"):
+        parts.append(
+            embedded(units_figure(fleet, name), f"{name} of each unit beside the population")
+        )
     parts.append("<h2>Posterior checks and compute</h2>")
-    diagnostics = result["diagnostics"]
-    status = (
-        "<span class='ok'>passed</span>" if result["passed"] else "<span class='bad'>FAILED</span>"
-    )
+    diagnostics = fleet.population.diagnostics
+    status = "<span class='ok'>passed</span>" if fleet.passed else "<span class='bad'>FAILED</span>"
     parts.append(
-        f"<p>Population posterior: {status}; {diagnostics['n_steps']} steps × "
-        f"{diagnostics['n_walkers']} walkers, max R-hat {_num(max(diagnostics['rhat'].values()))}"
-        f", min bulk ESS {_num(min(diagnostics['ess_bulk'].values()))}, acceptance "
-        f"{_num(diagnostics['acceptance_fraction'], 3)}, effective points per unit ≥ "
-        f"{_num(min(diagnostics['effective_points'].values()), 3)}.</p>"
+        f"<p>Population posterior: {status}; {diagnostics.n_steps} steps × "
+        f"{diagnostics.n_walkers} walkers, max R-hat {num(max(diagnostics.rhat.values()))}"
+        f", min bulk ESS {num(min(diagnostics.ess_bulk.values()))}, acceptance "
+        f"{num(diagnostics.acceptance_fraction, 3)}, effective points per unit ≥ "
+        f"{num(min(_effective_points(fleet).values()), 3)}.</p>"
     )
-    compute = result["compute"]
+    compute = fleet.compute
     parts.append(
         f"<p>{compute['tasks']} tasks on {compute['workers']} workers at "
-        f"<code>{_esc(compute['scheduler'])}</code> ({_esc(compute['cluster'])}): "
-        f"{_num(compute['wall_s'], 3)} s, a task {_num(compute['task_s']['mean'], 3)} s on "
-        f"average, {_num(compute['result_bytes']['mean'] / 1e3, 3)} kB shipped back each.</p>"
+        f"<code>{esc(compute['scheduler'])}</code> ({esc(compute['cluster'])}): "
+        f"{num(compute['wall_s'], 3)} s, a task {num(compute['task_s']['mean'], 3)} s on "
+        f"average, {num(compute['result_bytes']['mean'] / 1e3, 3)} kB shipped back each.</p>"
     )
     parts.append(
         "<table><thead><tr><th>row</th><th>recording</th><th>unit</th><th>run</th>"
         "<th>samples</th><th>checks</th></tr></thead><tbody>"
         + "".join(
-            f"<tr><td>{r['row']}</td><td><code>{_esc(r['source'])}</code></td>"
-            f"<td>{_esc(r['unit'])}</td><td>{_esc(r['run'])}</td><td>{r['n_samples']}</td>"
-            f"<td class='num'>R-hat {_num(r['checks']['max_rhat'])}, ESS "
-            f"{_num(r['checks']['min_ess_bulk'])}</td></tr>"
-            for r in result["recordings"]
+            f"<tr><td>{r.row}</td><td><code>{esc(r.source)}</code></td>"
+            f"<td>{esc(r.unit)}</td><td>{esc(r.run)}</td><td>{r.n_samples}</td>"
+            f"<td class='num'>R-hat {num(r.checks['max_rhat'])}, ESS "
+            f"{num(r.checks['min_ess_bulk'])}</td></tr>"
+            for r in fleet.recordings
         )
         + "</tbody></table>"
     )
-    if result["notes"]:
+    if fleet.notes:
         parts.append(
-            "<ul class='note'>"
-            + "".join(f"<li>{_esc(note)}</li>" for note in result["notes"])
-            + "</ul>"
+            "<ul class='note'>" + "".join(f"<li>{esc(note)}</li>" for note in fleet.notes) + "</ul>"
         )
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"

@@ -1,444 +1,571 @@
 """The per-sensor report: one self-contained HTML page (figures embedded as PNG, no external
 resource, opens offline) for the channels of one recording, classical and Bayesian side by
-side, with the health checks of every posterior and the discovery findings.
+side, with the health checks of every posterior and the discovery findings; and the JSON
+behind it.
 
-Figures are drawn with matplotlib's Agg canvas (no display, no pyplot state):
-
-- **Allan deviation**: the measured overlapping ADEV with its classical chi-square bars, and
-  two posterior bands. The darker one is the spread over posterior draws of the model's
-  *exact* Allan deviation (NoiseModel.allan_variance, closed form at every tau): the
-  uncertainty of the parameters alone. The lighter one is the posterior predictive band of
-  the *measured* ADEV: each draw's exact Allan variance times a chi-square variate with the
-  same equivalent degrees of freedom as the classical bars (Greenhall), so it adds the
-  estimator's scatter. Both pointwise, 90 %. This is exact for the model's mean and as good
-  as the classical bars for the scatter, at no simulation cost (simulating a recording per
-  draw would cost seconds per channel and add nothing the chi-square law does not carry).
-- **Spectrum**: the binned periodogram of the increments that the Whittle likelihood fits
-  (bins of 2 % relative width), shown as the amplitude spectral density of the samples
-  (divided by |1 - e^{-2 pi i f / fs}|^2 fs, two-sided, so white noise reads N), against the
-  expected periodogram of posterior draws (the tapered, debiased expectation the likelihood
-  uses) and its predictive band (a bin's mean of k ordinates is Gamma(k) / k times it).
-- **Posterior pairs**: every pair of sampled parameters, the noise scales on log axes.
+What a channel's part of the page shows is one typed :class:`ChannelAnalysis`: its noise
+(:class:`~bayescal.report._noise.NoiseAnalysis`), the posterior bands of its figures
+(:func:`~bayescal.inference._bands.allan_band`, :func:`~bayescal.inference._bands.spectrum_band`),
+the comparison with its sensor card (:class:`DatasheetComparison`) and its discovery
+(:class:`~bayescal.report._discovery.Findings`). The page (:func:`build_report`) and the JSON
+(:func:`report_document`: each channel's ``noise`` document with the numbers behind its
+figures, the datasheet comparison and the discovery documents) both read those objects; the
+figures are :mod:`._figures`'.
 """
 
-import base64
 import datetime
-import html
-import io
-import itertools
-import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 from importlib.metadata import version
 
-import numpy as np
-
 from .._errors import InputError
-from ..classical._noise import ClassicalNoise
-from ..inference._bands import allan_band, draw_subset, spectrum_band
-from ..inference._noise_posterior import NoisePosterior
+from ..capabilities._effect_noise import EffectNoise, noise_with_effects
+from ..inference._bands import AllanBand, SpectrumBand, allan_band, spectrum_band
+from ..inference._sampler import Sampler
 from ..models._terms import PARAMETERS, card_values, display_values, parameter_unit
-from ..recording._recording import Channel
-from ._noise import frequency_text
+from ._discovery import Findings, discovery_document, discovery_figures
+from ._figures import allan_figure, embedded, pair_figure, spectrum_figure
+from ._format import (
+    STYLE,
+    esc,
+    interval,
+    num,
+    percent,
+    pretty_unit,
+    quantity,
+    stacked,
+)
+from ._noise import (
+    BIAS_DEFINITION,
+    INTERVAL,
+    NoiseAnalysis,
+    display_summary,
+    frequency_text,
+    noise_document,
+    read_at,
+)
+from ._noise import t_interval_explanation as explanation_of
 
 DATASHEET_TOLERANCE = (0.8, 1.25)
-PAIR_POINTS = 800
-_POSITIVE = {name for name, p in PARAMETERS.items() if p.link in ("log", "log_logit")}
-"""Parameters drawn on a log axis: the scales (and time constants) of the noise terms."""
 _PARAMETER_NAMES = {"bias": "bias (turn-on)"} | {
     name: f"{name} {p.meaning}" for name, p in PARAMETERS.items()
 }
+DATASHEET_NOTE = (
+    "the posterior used the card as its prior (log-normal, sd log 3); the "
+    "classical reading is independent of it. Verdicts from the 90 % interval of "
+    "measured / datasheet: better (worse) when it lies below 0.8 (above 1.25), as the "
+    "datasheet when inside [0.8, 1.25]"
+)
 
 
-@dataclass
+@dataclass(frozen=True)
+class DatasheetRow:
+    """One figure of a sensor card beside the unit's classical reading and posterior."""
+
+    parameter: str
+    datasheet: float
+    """The card's value, in :attr:`unit`."""
+    unit: str
+    source: str
+    """Where on the datasheet it comes from."""
+    display: dict
+    """The card's value in the units datasheets use (label -> value)."""
+    classical: object | None = None
+    """The IEEE 952 reading (:class:`~bayescal.SlopeReading`), when there is one."""
+    bayesian: dict | None = None
+    """The posterior's ``mean``, ``q05`` and ``q95``, when the model holds the term."""
+
+    @property
+    def ratio(self) -> dict | None:
+        """Measured / datasheet: mean, q05 and q95 of the posterior over the card's value."""
+        if self.bayesian is None:
+            return None
+        return {key: value / self.datasheet for key, value in self.bayesian.items()}
+
+    @property
+    def verdict(self) -> str | None:
+        """Better or worse when the 90 % interval of measured / datasheet lies wholly below
+        0.8 or above 1.25 (datasheets quote typical units, so a few percent is no verdict),
+        as the datasheet when it lies within [0.8, 1.25], else not resolved."""
+        ratio = self.ratio
+        if ratio is None:
+            return None
+        low, high = DATASHEET_TOLERANCE
+        if ratio["q95"] < low:
+            return "better than the datasheet"
+        if ratio["q05"] > high:
+            return "worse than the datasheet"
+        if ratio["q05"] >= low and ratio["q95"] <= high:
+            return "as the datasheet (within -20 %/+25 %)"
+        return "consistent with the datasheet, not resolved to ±25 %"
+
+    def as_dict(self) -> dict:
+        row = {
+            "datasheet": self.datasheet,
+            "unit": self.unit,
+            "source": self.source,
+            "display": self.display,
+        }
+        if self.classical is not None:
+            row["classical"] = {
+                key: getattr(self.classical, key) for key in ("value", "ci_low", "ci_high", "kind")
+            }
+        if self.bayesian is not None:
+            row["bayesian"] = dict(self.bayesian)
+            row["ratio"] = self.ratio
+            row["verdict"] = self.verdict
+        return row
+
+
+@dataclass(frozen=True)
+class DatasheetComparison:
+    """How the measured unit compares with its sensor card, figure by figure
+    (:func:`datasheet_comparison`); ``unavailable`` says why there is none."""
+
+    card: str
+    datasheet: str
+    rows: tuple[DatasheetRow, ...] = ()
+    unavailable: str | None = None
+
+    def as_dict(self) -> dict:
+        if self.unavailable is not None:
+            return {"card": self.card, "datasheet": self.datasheet, "unavailable": self.unavailable}
+        return {
+            "card": self.card,
+            "datasheet": self.datasheet,
+            "parameters": {row.parameter: row.as_dict() for row in self.rows},
+            "note": DATASHEET_NOTE,
+        }
+
+
+def _interval_of(summary) -> dict:
+    """mean, q05, q95 of a posterior summary (typed or a dict)."""
+    if isinstance(summary, dict):
+        return {key: summary[key] for key in ("mean", "q05", "q95")}
+    return {key: getattr(summary, key) for key in ("mean", "q05", "q95")}
+
+
+def datasheet_comparison(card, analysis: NoiseAnalysis, effects=None) -> DatasheetComparison:
+    """How the measured unit compares with its sensor card: for each figure the card gives,
+    the datasheet value, the classical reading and the posterior (of the model with the
+    effects discovery found, ``effects``, where it found any the noise model lacks), their
+    ratio and a verdict (:attr:`DatasheetRow.verdict`); ``unavailable`` when the card has no
+    section for this kind of channel."""
+    unit = analysis.unit
+    try:
+        values = card_values(card, unit)
+    except InputError as error:
+        return DatasheetComparison(card.name, card.datasheet, unavailable=str(error))
+    if effects is not None:
+        posterior = effects.parameters
+    else:
+        posterior = {} if analysis.noise is None else analysis.noise.parameters
+    posterior = {name: _interval_of(summary) for name, summary in posterior.items()}
+    readings = analysis.classical.slope_readings
+    rows = tuple(
+        DatasheetRow(
+            parameter=parameter,
+            datasheet=value,
+            unit=parameter_unit(parameter, unit),
+            source=source,
+            display=display_values(parameter, value, unit),
+            classical=readings.get(parameter),
+            bayesian=posterior.get(parameter),
+        )
+        for parameter, (value, source) in values.items()
+    )
+    return DatasheetComparison(card.name, card.datasheet, rows)
+
+
+@dataclass(frozen=True)
 class ChannelAnalysis:
-    """Everything the page shows of one channel."""
+    """Everything the page shows of one channel: its noise, the posterior bands of its
+    figures (None without a posterior), how it compares with its sensor card and, where
+    discovery found effects the noise model lacks, the noise in the model that holds them
+    (:class:`~bayescal.capabilities._effect_noise.EffectNoise`): the channel's numbers then
+    come from it, and the noise model's are shown as contaminated."""
 
-    data: Channel
-    classical: ClassicalNoise
-    result: dict
-    """The ``bayescal noise`` JSON document of the channel (classical and bayesian blocks)."""
-    fit: NoisePosterior | None
-    datasheet: dict | None = None
-    """How the unit compares with its sensor card (:func:`datasheet_comparison`)."""
-    bands: dict = field(default_factory=dict)
-    """Numbers behind the figures' posterior bands (filled by :func:`posterior_bands`)."""
+    noise: NoiseAnalysis
+    allan: AllanBand | None = None
+    spectrum: SpectrumBand | None = None
+    datasheet: DatasheetComparison | None = None
+    effects: EffectNoise | None = None
 
     @property
     def channel(self) -> str:
-        return self.data.channel
+        return self.noise.channel
 
     @property
     def unit(self) -> str:
-        return self.data.unit
+        return self.noise.unit
 
     @property
-    def misfits(self) -> list[str]:
-        """Where the fitted model does not describe the record."""
-        checks = self.result.get("bayesian", {}).get("fit_checks", [])
-        return [check["misfit"] for check in checks if check["misfit"]]
+    def fit(self):
+        """The posterior (None: classical only)."""
+        return self.noise.fit
 
     @property
     def failures(self) -> list[str]:
-        """The failed sampler checks, then the misfits."""
-        if self.fit is None:
-            return []
-        return [*self.fit.diagnostics.failures, *(f"model misfit: {m}" for m in self.misfits)]
+        """The failed sampler checks, then the misfits (of the model with the effects too)."""
+        failures = [] if self.noise.noise is None else list(self.noise.noise.failures)
+        if self.effects is not None:
+            failures += [f"{_with(self.effects)}: {f}" for f in self.effects.failures]
+        return failures
 
     @property
     def passed(self) -> bool:
         return not self.failures
 
 
-# ---------------------------------------------------------------------------------------------
-# Numbers behind the figures
+def _with(effects: EffectNoise) -> str:
+    """The model with the effects, in words: ``the model with thermal_bias``."""
+    return "the model with " + " and ".join(effects.effects)
 
 
-def posterior_bands(analysis: ChannelAnalysis, *, seed: int = 0) -> dict:
-    """Fill ``analysis.bands`` (Allan and spectrum) from its posterior; empty without one."""
-    if analysis.fit is None:
-        analysis.bands = {}
-        return analysis.bands
-    allan = allan_band(analysis.fit, analysis.classical.allan, seed=seed)
-    allan["unit"] = analysis.unit
-    spectrum = spectrum_band(analysis.fit, seed=seed)
-    spectrum["unit"] = f"{analysis.unit}/sqrt(Hz)"
-    analysis.bands = {"allan": allan, "spectrum": spectrum}
-    return analysis.bands
+def with_bands(noise: NoiseAnalysis, *, seed: int = 0, card=None) -> ChannelAnalysis:
+    """The page's view of a channel: its noise with the posterior bands of its figures and,
+    with a sensor card, the datasheet comparison."""
+    allan = spectrum = None
+    if noise.fit is not None:
+        allan = allan_band(noise.fit, noise.classical.allan, seed=seed)
+        spectrum = spectrum_band(noise.fit, seed=seed)
+    datasheet = None if card is None else datasheet_comparison(card, noise)
+    return ChannelAnalysis(noise, allan, spectrum, datasheet)
 
 
-def datasheet_comparison(card, analysis: ChannelAnalysis) -> dict | None:
-    """How the measured unit compares with its sensor card: for each figure the card gives,
-    the datasheet value, the classical reading and the posterior, their ratio and a verdict
-    on the 90 % interval of measured / datasheet: better or worse when it lies wholly below
-    0.8 or above 1.25 (datasheets quote typical units, so a few percent is no verdict), as the
-    datasheet when it lies within [0.8, 1.25], else not resolved.
-    ``{"unavailable": reason}`` when the card has no section for this kind of channel."""
-    unit = analysis.unit
-    try:
-        values = card_values(card, unit)
-    except InputError as error:
-        return {"card": card.name, "datasheet": card.datasheet, "unavailable": str(error)}
-    bayesian = analysis.result.get("bayesian", {}).get("parameters", {})
-    readings = analysis.result["classical"]["slope_readings"]
-    rows = {}
-    for parameter, (value, source) in values.items():
-        row = {
-            "datasheet": value,
-            "unit": parameter_unit(parameter, unit),
-            "source": source,
-            "display": display_values(parameter, value, unit),
-        }
-        if parameter in readings:
-            reading = readings[parameter]
-            row["classical"] = {key: reading[key] for key in ("value", "ci_low", "ci_high", "kind")}
-        if parameter in bayesian:
-            posterior = bayesian[parameter]
-            row["bayesian"] = {key: posterior[key] for key in ("mean", "q05", "q95")}
-            ratio = {key: posterior[key] / value for key in ("mean", "q05", "q95")}
-            row["ratio"] = ratio
-            low, high = DATASHEET_TOLERANCE
-            if ratio["q95"] < low:
-                row["verdict"] = "better than the datasheet"
-            elif ratio["q05"] > high:
-                row["verdict"] = "worse than the datasheet"
-            elif ratio["q05"] >= low and ratio["q95"] <= high:
-                row["verdict"] = "as the datasheet (within -20 %/+25 %)"
-            else:
-                row["verdict"] = "consistent with the datasheet, not resolved to ±25 %"
-        rows[parameter] = row
-    return {
-        "card": card.name,
-        "datasheet": card.datasheet,
-        "parameters": rows,
-        "note": "the posterior used the card as its prior (log-normal, sd log 3); the "
-        "classical reading is independent of it. Verdicts from the 90 % interval of "
-        "measured / datasheet: better (worse) when it lies below 0.8 (above 1.25), as the "
-        "datasheet when inside [0.8, 1.25]",
-    }
+def with_effects(
+    analysis: ChannelAnalysis, findings: Findings, *, seed: int = 0, sampler=None, card=None
+) -> ChannelAnalysis:
+    """``analysis`` told with its discovery: where discovery found effects the noise model
+    lacks, the noise of the model that holds them
+    (:func:`~bayescal.capabilities._effect_noise.noise_with_effects`) and the datasheet
+    comparison made from it; unchanged otherwise."""
+    if analysis.noise.noise is None:
+        return analysis
+    effects = noise_with_effects(
+        analysis.noise.noise, findings.discovery, seed=seed, sampler=sampler or Sampler()
+    )
+    if effects is None:
+        return analysis
+    datasheet = None if card is None else datasheet_comparison(card, analysis.noise, effects)
+    return replace(analysis, effects=effects, datasheet=datasheet)
 
 
 # ---------------------------------------------------------------------------------------------
-# Formatting
+# A channel's part of the page
 
 
-def _esc(value) -> str:
-    return html.escape(str(value), quote=True)
+def _posterior(summary, unit: str) -> str:
+    """A posterior summary (mean [q05, q95]) with its unit."""
+    return interval(summary.mean, summary.q05, summary.q95, unit)
 
 
-def _num(value, digits: int = 4) -> str:
-    if value is None:
-        return "n/a"
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        return _esc(value)
-    if not math.isfinite(number):
-        return "n/a"
-    return f"{number:.{digits}g}"
-
-
-def pretty_unit(unit: str) -> str:
-    """A unit as text for the page: sqrt(Hz) -> √Hz, ^2 -> ², degC -> °C, 1 -> (no unit)."""
-    if unit in ("1", ""):
-        return "(dimensionless)"
-    text = unit.replace("sqrt(Hz)", "√Hz").replace("sqrt(h)", "√h").replace("^2", "²")
-    return text.replace("^3", "³").replace("degC", "°C")
-
-
-def _squared(unit: str) -> str:
-    text = pretty_unit(unit)
-    return f"({text})²" if any(mark in text for mark in "/*·") else f"{text}²"
-
-
-def _q(value, unit: str, digits: int = 4) -> str:
-    """A number with its unit, HTML-escaped."""
-    return f"{_num(value, digits)}&nbsp;{_esc(pretty_unit(unit))}"
-
-
-def _digits(value, low, high) -> int:
-    """Significant digits that resolve an interval: a bias of 9.8 m/s^2 known to 1e-4 needs
-    six, a noise density known to 1 % needs four."""
-    try:
-        value, width = abs(float(value)), abs(float(high) - float(low)) / 2
-    except (TypeError, ValueError):
-        return 4
-    if not (math.isfinite(value) and math.isfinite(width)) or value == 0 or width == 0:
-        return 4
-    return min(10, max(4, math.ceil(math.log10(value / width)) + 2))
-
-
-def _interval(value, low, high, unit: str) -> str:
-    digits = _digits(value, low, high)
+def _classical_cell(name: str, noise: NoiseAnalysis) -> str:
+    classical = noise.classical
+    shown = percent(classical.confidence)
+    if name == "bias":
+        return (
+            interval(classical.bias, classical.bias_ci_low, classical.bias_ci_high, noise.unit)
+            + f" <span class='note'>(sample mean, {shown} Student-t)</span>"
+        )
+    reading = classical.slope_readings.get(name)
+    if reading is None:
+        return "—"
+    unit = parameter_unit(name, noise.unit)
+    if reading.kind == "upper_bound":
+        return f"≤ {quantity(reading.ci_high, unit)} <span class='note'>(upper bound)</span>"
     return (
-        f"{_num(value, digits)} [{_num(low, digits)}, {_num(high, digits)}]"
-        f"&nbsp;{_esc(pretty_unit(unit))}"
+        interval(reading.value, reading.ci_low, reading.ci_high, unit)
+        + f" <span class='note'>({esc(read_at(reading))}, {shown})</span>"
     )
 
 
-def _posterior(entry: dict, unit: str | None = None) -> str:
-    """A posterior summary (mean, q05, q95) with its unit."""
-    return _interval(
-        entry.get("mean"), entry.get("q05"), entry.get("q95"), unit or entry.get("unit", "")
-    )
+def _display_cell(name: str, summary, unit: str) -> str:
+    if summary is None:
+        return "—"
+    items = [
+        interval(shown["mean"], shown["q05"], shown["q95"], label)
+        for label, shown in display_summary(name, summary, unit).items()
+    ]
+    return "<br>".join(items) or "—"
 
 
-def _stacked(value, low, high, unit: str) -> str:
-    """Value with its unit, the interval below it (for narrow table cells)."""
-    digits = _digits(value, low, high)
+def _t_interval_html(noise: NoiseAnalysis) -> str:
+    classical = noise.classical
+    explanation = esc(explanation_of(classical))
+    if classical.t_interval.valid:
+        return f"<p class='ok'>Student-t interval of the bias: valid — {explanation}.</p>"
+    widening = num(classical.t_interval.widening, 3)
+    low, high = classical.widened_interval
     return (
-        f"{_q(value, unit, digits)}<br><span class='note'>[{_num(low, digits)}, "
-        f"{_num(high, digits)}]&nbsp;{_esc(pretty_unit(unit))}</span>"
+        f"<p class='bad'>Student-t interval of the bias NOT VALID — too narrow by ×{widening}: "
+        f"{explanation}. Widened interval (half-width ×{widening}): "
+        f"[{num(low)}, {num(high)}]&nbsp;{esc(pretty_unit(noise.unit))}.</p>"
     )
 
 
-def _percent(fraction) -> str:
-    return f"{100 * float(fraction):g}&nbsp;%"
+def _line_frequencies(fit) -> list[float]:
+    """The frequencies (Hz) of the spectral lines the noise fit ``fit`` took out, if any."""
+    block = None if fit.lines is None else fit.lines.as_dict()
+    return [line["frequency"]["mean"] for line in block["lines"]] if block else []
 
 
-# ---------------------------------------------------------------------------------------------
-# Figures
-
-
-def _png(figure) -> str:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-    FigureCanvasAgg(figure)
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=96)
-    return base64.b64encode(buffer.getvalue()).decode("ascii")
-
-
-def _image(encoded: str, alt: str) -> str:
-    return f'<img class="figure" alt="{_esc(alt)}" src="data:image/png;base64,{encoded}">'
-
-
-def _new_figure(width: float, height: float, panels: int = 1):
-    from matplotlib.figure import Figure
-
-    figure = Figure(figsize=(width, height), layout="constrained")
-    axes = figure.subplots(1, panels, squeeze=False)[0]
-    return figure, list(axes)
-
-
-def allan_figure(analysis: ChannelAnalysis) -> str:
-    allan = analysis.classical.allan
-    unit = pretty_unit(analysis.unit)
-    percent = f"{100 * allan.confidence:g} %"
-    figure, (axes,) = _new_figure(7.2, 4.4)
-    tau, deviation = np.asarray(allan.tau), np.asarray(allan.deviation)
-    usable = np.isfinite(deviation)
-    band = analysis.bands.get("allan")
-    if band:
-        level = f"{100 * band['level']:g} %"
-        axes.fill_between(
-            band["tau_s"],
-            band["predictive_low"],
-            band["predictive_high"],
-            color="#9ecae1",
-            alpha=0.45,
-            lw=0,
-            label=f"posterior predictive of the measured ADEV ({level})",
+def _lines_table(noise: NoiseAnalysis) -> str:
+    """The spectral lines of the channel: frequency, amplitude (or power and width) with
+    intervals, the test's ratio, aliased or not."""
+    fit = noise.noise
+    block = None if fit is None or fit.lines is None else fit.lines.as_dict()
+    if not block or not block["lines"]:
+        return ""
+    rows = []
+    for line in block["lines"]:
+        kind = (
+            f"broadened, {quantity(line['width_hz'], 'Hz')} wide"
+            if line["kind"] == "broadened"
+            else "sinusoid"
         )
-        axes.fill_between(
-            band["fine_tau_s"],
-            band["fine_expected_low"],
-            band["fine_expected_high"],
-            color="#3182bd",
-            alpha=0.55,
-            lw=0,
-            label=f"model's exact ADEV over posterior draws ({level})",
+        if line["aliased"]:
+            kind += f"; aliased (the filter passes {percent(line['filter_gain'])} there)"
+        amplitude, power = line["amplitude"], line["power"]
+        cells = (
+            esc(frequency_text(line["frequency"])),
+            interval(amplitude["mean"], amplitude["q05"], amplitude["q95"], noise.unit),
+            interval(power["mean"], power["q05"], power["q95"], power["unit"]),
+            num(line["ratio_to_floor"], 3),
         )
-        axes.plot(
-            band["fine_tau_s"],
-            band["fine_expected_median"],
-            color="#08519c",
-            lw=1.2,
-            label="model, posterior median",
+        rows.append(
+            "<tr>"
+            + "".join(f"<td class='num'>{cell}</td>" for cell in cells)
+            + f"<td>{kind}</td></tr>"
         )
-    low = np.asarray(allan.ci_low)[usable]
-    high = np.asarray(allan.ci_high)[usable]
-    centre = deviation[usable]
-    axes.errorbar(
-        tau[usable],
-        centre,
-        yerr=[np.maximum(centre - low, 0), np.maximum(high - centre, 0)],
-        fmt="o",
-        ms=3.5,
-        color="black",
-        ecolor="#444444",
-        capsize=2,
-        lw=1,
-        label=f"measured (overlapping), classical {percent} chi-square bars",
+    test = block["test"]
+    return (
+        f"<h4>Spectral lines ({len(block['lines'])}): taken out of the record the noise model "
+        "was fitted to, so that N is the floor between them</h4><table><thead><tr>"
+        "<th>frequency</th><th>amplitude (peak): mean [5 %, 95 %]</th><th>power</th>"
+        "<th>× the floor</th><th>kind</th></tr></thead><tbody>"
+        + "".join(rows)
+        + f"</tbody></table><p class='note'>Found by {esc(test['method'])}, family-wise "
+        f"{100 * test['family_wise_level']:g} % over {test['frequencies_searched']:,} "
+        f"frequencies; resolution {quantity(test['resolution_hz'], 'Hz')}.</p>"
     )
-    axes.set_xscale("log")
-    axes.set_yscale("log")
-    axes.set_xlabel("averaging time τ [s]")
-    axes.set_ylabel(f"Allan deviation [{unit}]")
-    axes.set_title(f"{analysis.channel}: Allan deviation")
-    axes.grid(True, which="both", lw=0.3, alpha=0.6)
-    axes.legend(fontsize=7.5, loc="best")
-    return _png(figure)
 
 
-def spectrum_figure(analysis: ChannelAnalysis) -> str:
-    band = analysis.bands["spectrum"]
-    unit = pretty_unit(analysis.unit)
-    level = f"{100 * band['level']:g} %"
-    figure, (axes,) = _new_figure(7.2, 4.4)
-    frequency = band["frequency_hz"]
-    axes.fill_between(
-        frequency,
-        band["predictive_low"],
-        band["predictive_high"],
-        color="#fdae6b",
-        alpha=0.45,
-        lw=0,
-        label=f"posterior predictive of the binned periodogram ({level})",
-    )
-    axes.fill_between(
-        frequency,
-        band["expected_low"],
-        band["expected_high"],
-        color="#e6550d",
-        alpha=0.6,
-        lw=0,
-        label=f"model spectrum over posterior draws ({level})",
-    )
-    axes.plot(
-        frequency,
-        band["measured_asd"],
-        ".",
-        ms=2.5,
-        color="black",
-        label="measured (binned periodogram, 2 % bins)",
-    )
-    axes.plot(
-        frequency, band["expected_median"], color="#a63603", lw=1.2, label="model, posterior median"
-    )
-    found = analysis.result.get("bayesian", {}).get("spectral_lines", {}).get("lines", [])
-    for index, line in enumerate(found):
-        axes.axvline(
-            line["frequency"]["mean"],
-            color="#3182bd",
-            lw=0.8,
-            ls="--",
-            label="spectral lines (taken out of the record fitted)" if index == 0 else None,
-        )
-    axes.set_xscale("log")
-    axes.set_yscale("log")
-    axes.set_xlabel("frequency [Hz]")
-    axes.set_ylabel(f"amplitude spectral density [{unit}/√Hz]")
-    axes.set_title(f"{analysis.channel}: spectrum (two-sided; white noise reads N)")
-    axes.grid(True, which="both", lw=0.3, alpha=0.6)
-    axes.legend(fontsize=7.5, loc="best")
-    return _png(figure)
-
-
-def pair_figure(analysis: ChannelAnalysis) -> str:
-    from matplotlib.figure import Figure
-    from matplotlib.ticker import MaxNLocator
-
-    fit = analysis.fit
-    names = ["bias", *fit.problem.parameters]
-    sample = draw_subset(fit, PAIR_POINTS, 7)
-    size = len(names)
-    figure = Figure(figsize=(1.9 * size + 0.8, 1.9 * size + 0.6))
-    grid = figure.subplots(size, size, squeeze=False)
-    inch = 1.0 / (1.9 * size + 0.8)
-    figure.subplots_adjust(
-        left=0.75 * inch,
-        bottom=0.6 * inch,
-        right=0.98,
-        top=1 - 0.35 * inch,
-        wspace=0.08,
-        hspace=0.08,
-    )
-    values = {}
+def _side_by_side_table(noise: NoiseAnalysis) -> str:
+    parameters = {} if noise.noise is None else noise.noise.parameters
+    names = list(parameters) or ["bias", *noise.classical.slope_readings]
+    rows = []
     for name in names:
-        draw = sample[name]
-        values[name] = np.log10(draw) if name in _POSITIVE and np.all(draw > 0) else draw
-    for row, y_name in enumerate(names):
-        for column, x_name in enumerate(names):
-            axes = grid[row][column]
-            if column > row:
-                axes.set_axis_off()
-                continue
-            if column == row:
-                axes.hist(values[x_name], bins=30, color="#3182bd", alpha=0.8)
-            else:
-                axes.plot(
-                    values[x_name],
-                    values[y_name],
-                    ".",
-                    ms=1.5,
-                    alpha=0.35,
-                    color="#08519c",
-                    rasterized=True,
-                )
-            axes.tick_params(labelsize=6.5)
-            axes.xaxis.set_major_locator(MaxNLocator(3))
-            axes.yaxis.set_major_locator(MaxNLocator(4))
-            if column == row:
-                axes.set_yticks([])
-            if row == size - 1:
-                axes.set_xlabel(_pair_label(x_name, analysis.unit), fontsize=7.5)
-            else:
-                axes.set_xticklabels([])
-            if column == 0 and row > 0:
-                axes.set_ylabel(_pair_label(y_name, analysis.unit), fontsize=7.5)
-            elif column != row:
-                axes.set_yticklabels([])
-    figure.suptitle(
-        f"{analysis.channel}: posterior pairs ({sample['bias'].size} draws)", fontsize=10
+        summary = parameters.get(name)
+        unit = parameter_unit(name, noise.unit)
+        bayesian = (
+            _posterior(summary, unit) + f"<br><span class='note'>MAP {quantity(summary.map, unit)}"
+            f" ± {quantity(summary.map_sd, unit)}</span>"
+            if summary
+            else "—"
+        )
+        rows.append(
+            f"<tr><td>{esc(_PARAMETER_NAMES.get(name, name))}</td>"
+            f"<td class='num'>{_classical_cell(name, noise)}</td><td class='num'>{bayesian}</td>"
+            f"<td class='num'>{_display_cell(name, summary, noise.unit)}</td></tr>"
+        )
+    rows.append(
+        f"<tr><td>standard deviation of the samples</td><td class='num'>"
+        f"{quantity(noise.classical.std, noise.unit)}</td><td>—</td><td>—</td></tr>"
     )
-    return _png(figure)
+    return (
+        "<table><thead><tr><th>parameter</th><th>classical</th>"
+        "<th>Bayesian: posterior mean [5 %, 95 %]</th><th>Bayesian in datasheet units</th>"
+        "</tr></thead><tbody>" + "".join(rows) + "</tbody></table>"
+    )
 
 
-def _pair_label(name: str, unit: str) -> str:
-    shown = pretty_unit(parameter_unit(name, unit))
-    if name in _POSITIVE:
-        return f"log10 {name} [{shown}]"
-    return f"{name} [{shown}]"
+def _datasheet_html(comparison: DatasheetComparison | None) -> str:
+    if comparison is None:
+        return ""
+    head = (
+        f"<h4>Against the datasheet: {esc(comparison.card)}</h4>"
+        f"<p class='note'>{esc(comparison.datasheet)}</p>"
+    )
+    if comparison.unavailable is not None:
+        return head + f"<p>No comparison: {esc(comparison.unavailable)}</p>"
+    rows = []
+    for row in comparison.rows:
+        unit = row.unit
+        shown = "".join(
+            f"<br><span class='note'>= {quantity(value, label)}</span>"
+            for label, value in row.display.items()
+        )
+        classical = row.classical
+        classical_text = (
+            "—"
+            if classical is None
+            else f"≤ {quantity(classical.ci_high, unit)}"
+            if classical.kind == "upper_bound"
+            else interval(classical.value, classical.ci_low, classical.ci_high, unit)
+        )
+        posterior_text = (
+            interval(row.bayesian["mean"], row.bayesian["q05"], row.bayesian["q95"], unit)
+            if row.bayesian
+            else "— (term not in the model)"
+        )
+        verdict = row.verdict or "—"
+        ratio = row.ratio
+        ratio_text = (
+            f"{num(ratio['mean'], 3)} [{num(ratio['q05'], 3)}, {num(ratio['q95'], 3)}]"
+            "&nbsp;(dimensionless)"
+            if ratio
+            else "—"
+        )
+        css = "bad" if verdict.startswith("worse") else "ok" if verdict.startswith("better") else ""
+        rows.append(
+            f"<tr><td>{esc(_PARAMETER_NAMES.get(row.parameter, row.parameter))}</td>"
+            f"<td class='num'>{quantity(row.datasheet, unit)}{shown}<br>"
+            f"<span class='note'>{esc(row.source)}</span></td>"
+            f"<td class='num'>{classical_text}</td><td class='num'>{posterior_text}</td>"
+            f"<td class='num'>{ratio_text}</td>"
+            f"<td class='{css}'>{esc(verdict)}</td></tr>"
+        )
+    return (
+        head + "<table><thead><tr><th>parameter</th><th>datasheet</th><th>classical reading</th>"
+        "<th>posterior mean [5 %, 95 %]</th><th>measured / datasheet</th><th>verdict</th>"
+        "</tr></thead><tbody>"
+        + "".join(rows)
+        + f"</tbody></table><p class='note'>{esc(DATASHEET_NOTE)}.</p>"
+    )
+
+
+def _link(effects: EffectNoise) -> str:
+    """The effects, each linked to the channel's discovery section."""
+    target = f"#discovery-{esc(effects.channel)}"
+    return " and ".join(
+        f"<a href='{target}'><code>{esc(name)}</code></a>" for name in effects.effects
+    )
+
+
+def _effects_html(analysis: ChannelAnalysis) -> str:
+    """The channel's story where discovery found effects its noise model lacks: what was
+    found, the noise and the effects' parameters from the model that holds them, its
+    checks; and that the noise model below is contaminated."""
+    effects, noise = analysis.effects, analysis.noise.noise
+    rows = []
+    for name, entry in effects.parameters.items():
+        shown = "<br>".join(
+            interval(values["mean"], values["q05"], values["q95"], label)
+            for label, values in display_summary(name, entry, analysis.unit).items()
+        )
+        rows.append(
+            f"<tr><td>{esc(_PARAMETER_NAMES.get(name, name))}</td><td class='num'>"
+            f"{interval(entry['mean'], entry['q05'], entry['q95'], entry['unit'])}</td>"
+            f"<td class='num'>{shown or '—'}</td></tr>"
+        )
+    d = effects.diagnostics
+    health = (
+        "<span class='ok'>passed</span>"
+        if not d.failures
+        else "<span class='bad'>FAILED: " + esc("; ".join(d.failures)) + "</span>"
+    )
+    failing = [check for check in effects.checks if not check.passed]
+    fits = (
+        "<span class='ok'>passed</span> ("
+        + esc(", ".join(check.name.replace("_", " ") for check in effects.checks))
+        + ")"
+        if not failing
+        else "<span class='bad'>FAILED: " + esc("; ".join(c.misfit for c in failing)) + "</span>"
+    )
+    added = (
+        f" ({esc(', '.join(effects.added))} from the noise model, so that each of its numbers "
+        "has its counterpart)"
+        if effects.added
+        else ""
+    )
+    return (
+        f"<div class='story' id='story-{esc(analysis.channel)}'><p><b>Discovery found "
+        f"{_link(effects)} on this channel</b>, which the noise model below (terms "
+        f"{esc(', '.join(noise.terms))}) lacks: that model absorbed it into its own terms, and "
+        "its noise numbers are <b>contaminated</b>. This channel's numbers (the summary's and "
+        "the datasheet comparison's) come from the model that holds it: "
+        f"<code>{esc(' + '.join(effects.terms))}</code>{added}.</p>"
+        "<table><thead><tr><th>parameter</th><th>posterior mean [5 %, 95 %]</th>"
+        "<th>in datasheet units</th></tr></thead><tbody>" + "".join(rows) + "</tbody></table>"
+        f"<p class='note'>Its posterior checks: {health}: {d.n_steps}&nbsp;steps × "
+        f"{d.n_walkers}&nbsp;walkers, max R-hat {num(max(d.rhat.values()), 4)}, min bulk ESS "
+        f"{num(min(d.ess_bulk.values()), 4)}. Its checks against the record: {fits}.</p></div>"
+    )
+
+
+def _channel_section(analysis: ChannelAnalysis, findings: Findings | None) -> str:
+    noise = analysis.noise
+    classical, window = noise.classical, noise.window
+    parts = [
+        f"<section id='channel-{esc(analysis.channel)}'>",
+        f"<h2>{esc(analysis.channel)} [{esc(pretty_unit(analysis.unit))}]</h2>",
+        f"<p>{classical.n_samples}&nbsp;samples at {quantity(classical.rate_hz, 'Hz')}, "
+        f"{quantity(classical.duration_s, 's')}; window {quantity(window.start_s, 's')} to "
+        f"{quantity(window.stop_s, 's')} ({esc(window.selected_by)}).</p>",
+    ]
+    if analysis.fit is not None and not analysis.passed:
+        parts.append(
+            "<div class='alarm'><b>POSTERIOR CHECKS FAILED — do not use the Bayesian numbers "
+            "of this channel:</b><ul>"
+            + "".join(f"<li>{esc(f)}</li>" for f in analysis.failures)
+            + "</ul></div>"
+        )
+    parts.append(_t_interval_html(noise))
+    effects = analysis.effects
+    if effects is not None:
+        parts.append(_effects_html(analysis))
+        parts.append(_datasheet_html(analysis.datasheet))
+        parts.append(
+            f"<h3>The noise model without {esc(' and '.join(effects.effects))} "
+            "(contaminated)</h3><p class='bad'>Contaminated by "
+            f"{_link(effects)}: the numbers and figures of this model, below, show the effect "
+            "absorbed into its terms; do not report them.</p>"
+        )
+    parts.append(_side_by_side_table(noise))
+    parts.append(_lines_table(noise))
+    fit = noise.fit
+    if fit is not None:
+        parts.append(
+            f"<p class='note'>Model terms: {esc(', '.join(fit.terms))}. Prior: "
+            f"{esc(fit.problem.prior.description)}. Bias: {esc(BIAS_DEFINITION)}. "
+            f"Seed {fit.seed}.</p>"
+        )
+        if noise.comparison:
+            parts.append(
+                "<p><b>Where classical and Bayesian disagree:</b></p><ul>"
+                + "".join(f"<li>{esc(note)}</li>" for note in noise.comparison)
+                + "</ul>"
+            )
+    if effects is None:
+        parts.append(_datasheet_html(analysis.datasheet))
+    channel, unit = analysis.channel, analysis.unit
+    checks = () if noise.noise is None else noise.noise.checks
+    allan_check = next((check for check in checks if check.name == "allan_deviation"), None)
+    parts.append(
+        embedded(
+            allan_figure(channel, unit, classical.allan, analysis.allan, allan_check),
+            f"{channel}: Allan deviation",
+        )
+    )
+    if fit is not None:
+        if analysis.spectrum is not None:
+            parts.append(
+                embedded(
+                    spectrum_figure(channel, unit, analysis.spectrum, _line_frequencies(fit)),
+                    f"{channel}: spectrum",
+                )
+            )
+        parts.append(embedded(pair_figure(channel, unit, fit), f"{channel}: posterior pairs"))
+    if noise.notes:
+        parts.append(
+            "<p class='note'>Notes:</p><ul class='note'>"
+            + "".join(f"<li>{esc(note)}</li>" for note in noise.notes)
+            + "</ul>"
+        )
+    if findings is not None:
+        parts.append(discovery_section(findings, analysis.effects))
+    parts.append("</section>")
+    return "\n".join(parts)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -448,13 +575,13 @@ def _pair_label(name: str, unit: str) -> str:
 def _location_text(location) -> str:
     if isinstance(location, dict):
         return "; ".join(
-            f"{_esc(key)} = {_keyed_value(key, value)}" for key, value in location.items()
+            f"{esc(key)} = {_keyed_value(key, value)}" for key, value in location.items()
         )
     if isinstance(location, (list, tuple)):
-        return ", ".join(_num(item) for item in location)
+        return ", ".join(num(item) for item in location)
     if location is None:
         return "—"
-    return _num(location) if isinstance(location, (int, float)) else _esc(location)
+    return num(location) if isinstance(location, (int, float)) else esc(location)
 
 
 _KEY_UNITS = (
@@ -467,164 +594,54 @@ _KEY_UNITS = (
 
 
 def _keyed_value(key: str, value) -> str:
-    """A value from a discovery dict, with the unit its key names (tau_s -> s)."""
+    """A value from a discovery's location or evidence, with the unit its key names
+    (tau_s -> s)."""
     if isinstance(value, dict):
         return "{" + _location_text(value) + "}"
     if isinstance(value, (list, tuple)):
-        text = ", ".join(_num(item) for item in value[:8])
+        text = ", ".join(num(item) for item in value[:8])
         if len(value) > 8:
             text += ", …"
         value_text = f"[{text}]"
     elif isinstance(value, bool) or not isinstance(value, (int, float)):
-        return _esc(value)
+        return esc(value)
     else:
-        value_text = _num(value)
+        value_text = num(value)
     lowered = key.lower()
     for suffix, unit in _KEY_UNITS:
         if lowered.endswith(suffix):
-            return f"{value_text}&nbsp;{_esc(unit)}"
+            return f"{value_text}&nbsp;{esc(unit)}"
     return f"{value_text}&nbsp;(as reported)"
-
-
-def _series(block: dict, key: str):
-    values = block.get(key)
-    if values is None:
-        return None
-    array = np.asarray(values, dtype=float).reshape(-1)
-    return array if array.size else None
-
-
-def _discovery_allan_figure(block: dict, unit: str, channel: str) -> str | None:
-    tau, adev = _series(block, "tau_s"), _series(block, "adev")
-    if tau is None or adev is None:
-        return None
-    stages = [
-        (title, _series(block, f"{key}_low"), _series(block, f"{key}_high"))
-        for title, key in (("before: baseline model", "baseline"), ("after: final model", "final"))
-    ]
-    stages = [stage for stage in stages if stage[1] is not None and stage[2] is not None] or [
-        ("measured", None, None)
-    ]
-    figure, panels = _new_figure(4.2 * len(stages) + 0.4, 3.8, len(stages))
-    for axes, (title, low, high) in zip(panels, stages, strict=True):
-        if low is not None:
-            axes.fill_between(
-                tau, low, high, color="#9ecae1", alpha=0.7, lw=0, label="model's predictive band"
-            )
-        axes.plot(tau, adev, "o-", ms=3, lw=1, color="black", label="measured")
-        axes.set_xscale("log")
-        axes.set_yscale("log")
-        axes.set_xlabel("τ [s]")
-        axes.set_ylabel(f"Allan deviation [{pretty_unit(unit)}]")
-        axes.set_title(f"{channel}: {title}", fontsize=9.5)
-        axes.grid(True, which="both", lw=0.3, alpha=0.6)
-        axes.legend(fontsize=7.5)
-    return _png(figure)
-
-
-def _discovery_spectrum_figure(block: dict, unit: str, channel: str) -> str | None:
-    frequency, power = _series(block, "frequency_hz"), _series(block, "power")
-    if frequency is None or power is None:
-        return None
-    stages = [
-        (title, _series(block, key))
-        for title, key in (
-            ("before: baseline model", "baseline_model"),
-            ("after: final model", "final_model"),
-        )
-    ]
-    stages = [stage for stage in stages if stage[1] is not None] or [("measured", None)]
-    figure, panels = _new_figure(4.2 * len(stages) + 0.4, 3.8, len(stages))
-    positive = frequency > 0
-    for axes, (title, model) in zip(panels, stages, strict=True):
-        axes.plot(
-            frequency[positive], power[positive], ".", ms=2, color="#555555", label="measured"
-        )
-        if model is not None:
-            axes.plot(frequency[positive], model[positive], color="#e6550d", lw=1.4, label="model")
-        axes.set_xscale("log")
-        axes.set_yscale("log")
-        axes.set_xlabel("frequency [Hz]")
-        axes.set_ylabel(f"power spectral density [{_squared(unit)}/Hz]")
-        axes.set_title(f"{channel}: {title}", fontsize=9.5)
-        axes.grid(True, which="both", lw=0.3, alpha=0.6)
-        axes.legend(fontsize=7.5)
-    return _png(figure)
-
-
-def _discovery_residual_figure(block: dict, unit: str, channel: str) -> str | None:
-    time = _series(block, "time_s")
-    stages = [
-        (title, _series(block, key))
-        for title, key in (
-            ("before: baseline residual", "baseline"),
-            ("after: final residual", "final"),
-        )
-    ]
-    stages = [stage for stage in stages if stage[1] is not None]
-    if time is None or not stages:
-        return None
-    figure, panels = _new_figure(4.2 * len(stages) + 0.4, 3.6, len(stages))
-    for axes, (title, residual) in zip(panels, stages, strict=True):
-        n = min(time.size, residual.size)
-        t, r = time[:n], residual[:n]
-        step = max(1, n // 4000)
-        axes.plot(
-            t[::step],
-            r[::step],
-            ".",
-            ms=1.2,
-            alpha=0.3,
-            color="#888888",
-            rasterized=True,
-            label="residual",
-        )
-        bins = min(100, max(1, n // 20))
-        edges = np.linspace(0, n, bins + 1).astype(int)
-        centres = [t[a:b].mean() for a, b in itertools.pairwise(edges) if b > a]
-        means = [r[a:b].mean() for a, b in itertools.pairwise(edges) if b > a]
-        axes.plot(centres, means, color="#d62728", lw=1.5, label=f"mean of {bins} blocks")
-        axes.axhline(0.0, color="black", lw=0.6)
-        axes.set_xlabel("time [s]")
-        axes.set_ylabel(f"residual [{pretty_unit(unit)}]")
-        axes.set_title(f"{channel}: {title}", fontsize=9.5)
-        axes.grid(True, lw=0.3, alpha=0.6)
-        axes.legend(fontsize=7.5)
-    return _png(figure)
 
 
 def _parameters_text(parameters: dict) -> str:
     items = []
-    for name, entry in (parameters or {}).items():
-        if isinstance(entry, dict):
-            unit = entry.get("unit", "(unit not given)")
-            items.append(f"{_esc(name)} = {_posterior(entry, unit)}")
+    for name, entry in parameters.items():
+        if "q05" in entry:
+            shown = interval(entry["mean"], entry["q05"], entry["q95"], entry["unit"])
         else:
-            items.append(f"{_esc(name)} = {_num(entry)}&nbsp;(as reported)")
+            shown = quantity(entry.get("mean", entry.get("value")), entry.get("unit", ""))
+        items.append(f"{esc(name)} = {shown}")
     return "<br>".join(items) or "—"
 
 
-def discovery_section(findings: dict, *, unit: str | None = None) -> str:
-    """HTML of the discovery findings of one channel (the issue-6 JSON contract, plus
-    ``diagnostics`` with ``allan``, ``spectrum`` and ``residual`` blocks for the before/after
-    figures; every key may be missing): the effects found with their evidence, the checks
-    before and after, and the figures."""
-    channel = findings.get("channel", "")
-    unit = unit or findings.get("unit") or "(unit not given)"
-    effects = findings.get("effects") or []
-    heading = f"Discovery: {_esc(channel)}" if channel else "Discovery"
-    parts = [f'<section class="discovery"><h3>{heading}</h3>']
-    baseline = findings.get("baseline")
-    final = findings.get("final_terms")
-    if baseline or final:
-        parts.append(
-            "<p>Baseline model: <code>"
-            + _esc(" + ".join(baseline or []) or "—")
-            + "</code>; final model: <code>"
-            + _esc(" + ".join(final or []) or "—")
-            + "</code>.</p>"
-        )
-    if not effects:
+def discovery_section(findings: Findings, story: EffectNoise | None = None) -> str:
+    """HTML of a channel's discovery: the effects found with their evidence, the checks
+    before and after, and the figures (:func:`~bayescal.report._discovery.discovery_figures`).
+    ``story``: the channel's model with the effects, when its numbers come from it (a note
+    says where its parameters differ from discovery's final model's)."""
+    discovery = findings.discovery
+    channel = discovery.channel
+    parts = [
+        f'<section class="discovery" id="discovery-{esc(channel)}">'
+        f"<h3>Discovery: {esc(channel)}</h3>",
+        "<p>Baseline model: <code>"
+        + esc(" + ".join(discovery.baseline))
+        + "</code>; final model: <code>"
+        + esc(" + ".join(discovery.final_terms))
+        + "</code>.</p>",
+    ]
+    if not discovery.effects:
         parts.append(
             '<p class="ok">No effect found: the baseline model explains the recording.</p>'
         )
@@ -634,50 +651,40 @@ def discovery_section(findings: dict, *, unit: str | None = None) -> str:
             "<th>ΔELPD ± SE</th><th>parameters (mean [5 %, 95 %])</th>"
             "<th>where</th><th>evidence</th></tr></thead><tbody>"
         )
-        for effect in effects:
-            delta, spread = effect.get("delta_elpd"), effect.get("delta_elpd_se")
+        for effect in discovery.effects:
             parts.append(
-                f"<tr><td><code>{_esc(effect.get('name', '?'))}</code></td>"
-                f"<td>{_esc(effect.get('explanation', ''))}</td>"
-                f"<td>{_num(delta)} ± {_num(spread)}&nbsp;nats</td>"
-                f"<td>{_parameters_text(effect.get('parameters'))}</td>"
-                f"<td>{_location_text(effect.get('location'))}</td>"
-                f"<td>{_location_text(effect.get('evidence'))}</td></tr>"
+                f"<tr><td><code>{esc(effect.name)}</code></td>"
+                f"<td>{esc(effect.explanation)}</td>"
+                f"<td>{num(effect.delta_elpd)} ± {num(effect.delta_elpd_se)}&nbsp;nats</td>"
+                f"<td>{_parameters_text(effect.parameters)}</td>"
+                f"<td>{_location_text(effect.location)}</td>"
+                f"<td>{_location_text(effect.evidence)}</td></tr>"
             )
         parts.append("</tbody></table>")
-    checks = findings.get("checks") or []
-    if checks:
+    if story is not None and story.added:
         parts.append(
-            "<h4>Checks of the baseline (posterior predictive)</h4><table><thead><tr>"
-            "<th>check</th><th>statistic (as defined by the check)</th>"
-            "<th>p-value (probability)</th><th>where</th><th>after the new terms</th>"
-            "</tr></thead><tbody>"
+            "<p class='note'>The parameters above are those of discovery's final model; the "
+            f"channel's numbers (<a href='#story-{esc(channel)}'>above</a>) come from that "
+            f"model with the noise model's {esc(', '.join(story.added))} added, whose "
+            "intervals are wider where the terms compete for the same drift.</p>"
         )
-        for check in checks:
-            after = check.get("passed_after")
-            after_text = {True: "passes", False: '<span class="bad">still fails</span>'}.get(
-                after, "—"
-            )
-            parts.append(
-                f"<tr><td>{_esc(check.get('name', '?'))}</td>"
-                f"<td>{_num(check.get('statistic'))}&nbsp;(as reported)</td>"
-                f"<td>{_num(check.get('p_value'))}&nbsp;(probability)</td>"
-                f"<td>{_location_text(check.get('location'))}</td><td>{after_text}</td></tr>"
-            )
-        parts.append("</tbody></table>")
-    diagnostics = findings.get("diagnostics") or {}
-    figures = [
-        (_discovery_allan_figure, "allan", "Allan deviation before and after"),
-        (_discovery_spectrum_figure, "spectrum", "spectrum before and after"),
-        (_discovery_residual_figure, "residual", "residual before and after"),
-    ]
-    for draw, key, alt in figures:
-        block = diagnostics.get(key)
-        if not isinstance(block, dict):
-            continue
-        encoded = draw(block, unit, channel or "channel")
-        if encoded:
-            parts.append(_image(encoded, f"{channel} discovery: {alt}"))
+    parts.append(
+        "<h4>Checks of the baseline (posterior predictive)</h4><table><thead><tr>"
+        "<th>check</th><th>statistic (as defined by the check)</th>"
+        "<th>p-value (probability)</th><th>where</th><th>after the new terms</th>"
+        "</tr></thead><tbody>"
+    )
+    for check in discovery.checks:
+        after = "passes" if check.passed_after else '<span class="bad">still fails</span>'
+        parts.append(
+            f"<tr><td>{esc(check.name)}</td>"
+            f"<td>{num(check.statistic)}&nbsp;(as reported)</td>"
+            f"<td>{num(check.p_value)}&nbsp;(probability)</td>"
+            f"<td>{_location_text(check.location)}</td><td>{after}</td></tr>"
+        )
+    parts.append("</tbody></table>")
+    for figure, alt in discovery_figures(findings).values():
+        parts.append(embedded(figure, f"{channel} discovery: {alt}"))
     parts.append("</section>")
     return "\n".join(parts)
 
@@ -685,82 +692,20 @@ def discovery_section(findings: dict, *, unit: str | None = None) -> str:
 # ---------------------------------------------------------------------------------------------
 # The page
 
-_STYLE = """
-body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 1.5em auto;
-       max-width: 1180px; color: #222; line-height: 1.4; padding: 0 1em; }
-h1 { font-size: 1.6em; margin-bottom: 0.2em; } h2 { border-bottom: 2px solid #3182bd;
-     padding-bottom: 0.15em; margin-top: 1.8em; } h3 { margin-top: 1.4em; }
-table { border-collapse: collapse; margin: 0.6em 0 1em 0; font-size: 0.88em; display: block;
-        overflow-x: auto; max-width: 100%; }
-th, td { border: 1px solid #ccc; padding: 0.25em 0.5em; vertical-align: top; text-align: left; }
-th { background: #eef3f8; } td.num { font-variant-numeric: tabular-nums; }
-.bad { color: #b00020; font-weight: bold; } .ok { color: #1b7a1b; }
-.alarm { background: #fde8ea; border: 2px solid #b00020; padding: 0.6em 1em; margin: 1em 0; }
-.alarm h2 { border: none; color: #b00020; margin-top: 0; }
-tr.failed td { background: #fde8ea; } .note { color: #555; font-size: 0.9em; }
-img.figure { display: block; max-width: 100%; margin: 0.6em 0; border: 1px solid #ddd; }
-code { background: #f4f4f4; padding: 0 0.2em; }
-"""
-
-
-def _classical_cell(name: str, result: dict) -> str:
-    classical = result["classical"]
-    percent = _percent(classical["bias"]["confidence"])
-    if name == "bias":
-        bias = classical["bias"]
-        return (
-            _interval(bias["value"], bias["ci_low"], bias["ci_high"], bias["unit"])
-            + f" <span class='note'>(sample mean, {percent} Student-t)</span>"
-        )
-    reading = classical["slope_readings"].get(name)
-    if reading is None:
-        return "—"
-    if reading["kind"] == "upper_bound":
-        bound = _q(reading["ci_high"], reading["unit"])
-        return f"≤ {bound} <span class='note'>(upper bound)</span>"
-    return (
-        _interval(reading["value"], reading["ci_low"], reading["ci_high"], reading["unit"])
-        + f" <span class='note'>({_esc(reading['read_at'])}, {percent})</span>"
-    )
-
-
-def _display_cell(name: str, result: dict) -> str:
-    entry = result.get("bayesian", {}).get("parameters", {}).get(name, {})
-    items = [_posterior(shown, label) for label, shown in entry.get("display", {}).items()]
-    return "<br>".join(items) or "—"
-
-
-def _t_interval_html(result: dict) -> str:
-    classical = result["classical"]
-    check = classical["t_interval_check"]
-    bias = classical["bias"]
-    unit = result["unit"]
-    explanation = _esc(check["explanation"])
-    if classical["t_interval_valid"]:
-        return f"<p class='ok'>Student-t interval of the bias: valid — {explanation}.</p>"
-    widening = _num(classical["t_interval_widening"], 3)
-    return (
-        f"<p class='bad'>Student-t interval of the bias NOT VALID — too narrow by ×{widening}: "
-        f"{explanation}. Widened interval (half-width ×{widening}): "
-        f"[{_num(bias['widened_ci_low'])}, {_num(bias['widened_ci_high'])}]"
-        f"&nbsp;{_esc(pretty_unit(unit))}.</p>"
-    )
-
 
 def _summary_table(analyses: list[ChannelAnalysis]) -> str:
     rows = []
     for analysis in analyses:
-        result = analysis.result
-        classical = result["classical"]
-        bias = classical["bias"]
-        parameters = result.get("bayesian", {}).get("parameters", {})
-        posterior_bias = parameters.get("bias")
-        classical_bias = _stacked(bias["value"], bias["ci_low"], bias["ci_high"], bias["unit"])
-        t_valid = classical["t_interval_valid"]
+        noise = analysis.noise
+        classical = noise.classical
+        parameters = {} if noise.noise is None else noise.noise.parameters
+        classical_bias = stacked(
+            classical.bias, classical.bias_ci_low, classical.bias_ci_high, noise.unit
+        )
         t_text = (
             "<span class='ok'>valid</span>"
-            if t_valid
-            else f"<span class='bad'>INVALID: ×{_num(classical['t_interval_widening'], 3)} too "
+            if classical.t_interval.valid
+            else f"<span class='bad'>INVALID: ×{num(classical.t_interval.widening, 3)} too "
             "narrow</span>"
         )
         health = (
@@ -770,38 +715,42 @@ def _summary_table(analyses: list[ChannelAnalysis]) -> str:
             if analysis.passed
             else "<span class='bad'>FAILED</span>"
         )
-        noise = []
-        for name in ("N", "B", "K"):
-            if name in parameters:
-                entry = parameters[name]
-                shown = _stacked(entry["mean"], entry["q05"], entry["q95"], entry["unit"])
-                noise.append(f"<td class='num'>{shown}</td>")
-            else:
-                noise.append("<td>—</td>")
+        cells = []
+        effects = analysis.effects
+        shown_parameters = parameters if effects is None else effects.parameters
+        for name in ("bias", "N", "B", "K"):
+            summary = shown_parameters.get(name)
+            if summary is None:
+                cells.append(
+                    "<td>—<br><span class='note'>varies with the effect</span></td>"
+                    if name == "bias" and effects is not None
+                    else "<td>—</td>"
+                )
+                continue
+            low_high = _interval_of(summary)
+            shown = stacked(
+                low_high["mean"], low_high["q05"], low_high["q95"], parameter_unit(name, noise.unit)
+            )
+            cells.append(f"<td class='num'>{shown}</td>")
+        story = (
+            ""
+            if effects is None
+            else f"<br><span class='note'>from the model with {_link(effects)}</span>"
+        )
         rows.append(
             f"<tr{' class=failed' if not analysis.passed else ''}>"
-            f"<td><a href='#channel-{_esc(analysis.channel)}'>{_esc(analysis.channel)}</a></td>"
-            f"<td class='num'>{_q(result['rate_hz'], 'Hz')}<br>{_q(result['duration_s'], 's')}</td>"
+            f"<td><a href='#channel-{esc(analysis.channel)}'>{esc(analysis.channel)}</a>"
+            f"{story}</td>"
+            f"<td class='num'>{quantity(classical.rate_hz, 'Hz')}<br>"
+            f"{quantity(classical.duration_s, 's')}</td>"
             f"<td class='num'>{classical_bias}</td><td>{t_text}</td>"
-            + (
-                "<td class='num'>"
-                + _stacked(
-                    posterior_bias["mean"],
-                    posterior_bias["q05"],
-                    posterior_bias["q95"],
-                    posterior_bias["unit"],
-                )
-                + "</td>"
-                if posterior_bias
-                else "<td>—</td>"
-            )
-            + "".join(noise)
+            + "".join(cells)
             + f"<td>{health}</td></tr>"
         )
-    percent = _percent(analyses[0].result["classical"]["bias"]["confidence"]) if analyses else ""
+    shown = percent(analyses[0].noise.classical.confidence) if analyses else ""
     return (
         "<table><thead><tr><th>channel</th><th>rate, duration</th>"
-        f"<th>bias, classical<br>(mean, {percent} Student-t)</th><th>Student-t interval</th>"
+        f"<th>bias, classical<br>(mean, {shown} Student-t)</th><th>Student-t interval</th>"
         "<th>bias, Bayesian<br>(mean [5 %, 95 %])</th><th>N white noise</th>"
         "<th>B bias instability</th><th>K rate random walk</th><th>posterior checks</th>"
         "</tr></thead><tbody>" + "".join(rows) + "</tbody></table>"
@@ -821,22 +770,24 @@ def _health_table(analyses: list[ChannelAnalysis]) -> str:
         status = (
             "<span class='ok'>passed</span>"
             if analysis.passed
-            else "<span class='bad'>FAILED: " + _esc("; ".join(analysis.failures)) + "</span>"
+            else "<span class='bad'>FAILED: " + esc("; ".join(analysis.failures)) + "</span>"
         )
         fits = (
             "<span class='ok'>yes</span>"
-            if not analysis.misfits
+            if analysis.noise.noise.fits
             else "<span class='bad'>MISFIT</span>"
         )
         rows.append(
-            f"<tr{' class=failed' if not analysis.passed else ''}><td>{_esc(analysis.channel)}</td>"
+            f"<tr{' class=failed' if not analysis.passed else ''}><td>{esc(analysis.channel)}</td>"
             f"<td class='num'>{d.n_steps}&nbsp;steps × {d.n_walkers}&nbsp;walkers</td>"
-            f"<td class='num'>{_num(tau, 3)} ({criterion})</td>"
-            f"<td class='num'>{_num(rhat, 4)}</td><td class='num'>{_num(ess, 4)}</td>"
-            f"<td class='num'>{_num(d.acceptance_fraction, 3)}</td>"
+            f"<td class='num'>{num(tau, 3)} ({criterion})</td>"
+            f"<td class='num'>{num(rhat, 4)}</td><td class='num'>{num(ess, 4)}</td>"
+            f"<td class='num'>{num(d.acceptance_fraction, 3)}</td>"
             f"<td>{'yes' if d.map_converged else '<b>no</b>'}</td><td>{fits}</td>"
             f"<td>{status}</td></tr>"
         )
+        if analysis.effects is not None:
+            rows.append(_effects_health_row(analysis.effects))
     if not rows:
         return "<p>No posterior was sampled (classical analysis only).</p>"
     return (
@@ -849,172 +800,44 @@ def _health_table(analyses: list[ChannelAnalysis]) -> str:
     )
 
 
-def _side_by_side_table(analysis: ChannelAnalysis) -> str:
-    result = analysis.result
-    parameters = result.get("bayesian", {}).get("parameters", {})
-    names = list(parameters) or ["bias", *result["classical"]["slope_readings"]]
-    rows = []
-    for name in names:
-        entry = parameters.get(name)
-        bayesian = (
-            _posterior(entry) + f"<br><span class='note'>MAP {_q(entry['map'], entry['unit'])} ± "
-            f"{_q(entry['map_sd'], entry['unit'])}</span>"
-            if entry
-            else "—"
-        )
-        rows.append(
-            f"<tr><td>{_esc(_PARAMETER_NAMES.get(name, name))}</td>"
-            f"<td class='num'>{_classical_cell(name, result)}</td><td class='num'>{bayesian}</td>"
-            f"<td class='num'>{_display_cell(name, result)}</td></tr>"
-        )
-    std = result["classical"]["std"]
-    rows.append(
-        f"<tr><td>standard deviation of the samples</td><td class='num'>"
-        f"{_q(std['value'], std['unit'])}</td><td>—</td><td>—</td></tr>"
+def _effects_health_row(effects: EffectNoise) -> str:
+    d = effects.diagnostics
+    status = (
+        "<span class='ok'>passed</span>"
+        if effects.passed
+        else "<span class='bad'>FAILED: " + esc("; ".join(effects.failures)) + "</span>"
+    )
+    fits = (
+        "<span class='ok'>yes</span>"
+        if all(check.passed for check in effects.checks)
+        else "<span class='bad'>MISFIT</span>"
     )
     return (
-        "<table><thead><tr><th>parameter</th><th>classical</th>"
-        "<th>Bayesian: posterior mean [5 %, 95 %]</th><th>Bayesian in datasheet units</th>"
-        "</tr></thead><tbody>" + "".join(rows) + "</tbody></table>"
+        f"<tr{' class=failed' if not effects.passed else ''}><td>{esc(effects.channel)}, "
+        f"{esc(_with(effects))}</td>"
+        f"<td class='num'>{d.n_steps}&nbsp;steps × {d.n_walkers}&nbsp;walkers</td>"
+        f"<td class='num'>{num(max(d.autocorr_time.values()), 3)} "
+        f"({'met' if d.converged else '<b>not met</b>'})</td>"
+        f"<td class='num'>{num(max(d.rhat.values()), 4)}</td>"
+        f"<td class='num'>{num(min(d.ess_bulk.values()), 4)}</td>"
+        f"<td class='num'>{num(d.acceptance_fraction, 3)}</td>"
+        f"<td>{'yes' if d.map_converged else '<b>no</b>'}</td><td>{fits}</td>"
+        f"<td>{status}</td></tr>"
     )
 
 
-def _lines_table(result: dict) -> str:
-    """The spectral lines of the channel: frequency, amplitude (or power and width) with
-    intervals, the test's ratio, aliased or not."""
-    block = result.get("bayesian", {}).get("spectral_lines")
-    if not block or not block["lines"]:
-        return ""
-    unit = result["unit"]
-    rows = []
-    for line in block["lines"]:
-        kind = (
-            f"broadened, {_q(line['width_hz'], 'Hz')} wide"
-            if line["kind"] == "broadened"
-            else "sinusoid"
-        )
-        if line["aliased"]:
-            kind += f"; aliased (the filter passes {_percent(line['filter_gain'])} there)"
-        rows.append(
-            f"<tr><td class='num'>{_esc(frequency_text(line['frequency']))}</td>"
-            f"<td class='num'>{_posterior(line['amplitude'], unit)}</td>"
-            f"<td class='num'>{_posterior(line['power'], line['power']['unit'])}</td>"
-            f"<td class='num'>{_num(line['ratio_to_floor'], 3)}</td><td>{_esc(kind)}</td></tr>"
-        )
-    test = block["test"]
-    return (
-        f"<h4>Spectral lines ({len(block['lines'])}): taken out of the record the noise model "
-        "was fitted to, so that N is the floor between them</h4><table><thead><tr>"
-        "<th>frequency</th><th>amplitude (peak): mean [5 %, 95 %]</th><th>power</th>"
-        "<th>× the floor</th><th>kind</th></tr></thead><tbody>"
-        + "".join(rows)
-        + f"</tbody></table><p class='note'>Found by {_esc(test['method'])}, family-wise "
-        f"{100 * test['family_wise_level']:g} % over {test['frequencies_searched']:,} "
-        f"frequencies; resolution {_q(test['resolution_hz'], 'Hz')}.</p>"
-    )
-
-
-def _datasheet_html(comparison: dict | None) -> str:
-    if not comparison:
-        return ""
-    head = (
-        f"<h4>Against the datasheet: {_esc(comparison['card'])}</h4>"
-        f"<p class='note'>{_esc(comparison['datasheet'])}</p>"
-    )
-    if "unavailable" in comparison:
-        return head + f"<p>No comparison: {_esc(comparison['unavailable'])}</p>"
-    rows = []
-    for name, row in comparison["parameters"].items():
-        unit = row["unit"]
-        shown = "".join(
-            f"<br><span class='note'>= {_q(value, label)}</span>"
-            for label, value in row["display"].items()
-        )
-        classical = row.get("classical")
-        classical_text = (
-            "—"
-            if not classical
-            else f"≤ {_q(classical['ci_high'], unit)}"
-            if classical["kind"] == "upper_bound"
-            else _interval(classical["value"], classical["ci_low"], classical["ci_high"], unit)
-        )
-        posterior = row.get("bayesian")
-        posterior_text = _posterior(posterior, unit) if posterior else "— (term not in the model)"
-        verdict = row.get("verdict", "—")
-        ratio = row.get("ratio")
-        ratio_text = (
-            f"{_num(ratio['mean'], 3)} [{_num(ratio['q05'], 3)}, {_num(ratio['q95'], 3)}]"
-            "&nbsp;(dimensionless)"
-            if ratio
-            else "—"
-        )
-        css = "bad" if verdict.startswith("worse") else "ok" if verdict.startswith("better") else ""
-        rows.append(
-            f"<tr><td>{_esc(_PARAMETER_NAMES.get(name, name))}</td>"
-            f"<td class='num'>{_q(row['datasheet'], unit)}{shown}<br>"
-            f"<span class='note'>{_esc(row['source'])}</span></td>"
-            f"<td class='num'>{classical_text}</td><td class='num'>{posterior_text}</td>"
-            f"<td class='num'>{ratio_text}</td>"
-            f"<td class='{css}'>{_esc(verdict)}</td></tr>"
-        )
-    return (
-        head + "<table><thead><tr><th>parameter</th><th>datasheet</th><th>classical reading</th>"
-        "<th>posterior mean [5 %, 95 %]</th><th>measured / datasheet</th><th>verdict</th>"
-        "</tr></thead><tbody>"
-        + "".join(rows)
-        + f"</tbody></table><p class='note'>{_esc(comparison['note'])}.</p>"
-    )
-
-
-def _channel_section(analysis: ChannelAnalysis, findings: dict | None) -> str:
-    result = analysis.result
-    window = result["window"]
-    parts = [
-        f"<section id='channel-{_esc(analysis.channel)}'>",
-        f"<h2>{_esc(analysis.channel)} [{_esc(pretty_unit(analysis.unit))}]</h2>",
-        f"<p>{result['n_samples']}&nbsp;samples at {_q(result['rate_hz'], 'Hz')}, "
-        f"{_q(result['duration_s'], 's')}; window {_q(window['start_s'], 's')} to "
-        f"{_q(window['stop_s'], 's')} ({_esc(window['selected_by'])}).</p>",
-    ]
-    if analysis.fit is not None and not analysis.passed:
-        parts.append(
-            "<div class='alarm'><b>POSTERIOR CHECKS FAILED — do not use the Bayesian numbers "
-            "of this channel:</b><ul>"
-            + "".join(f"<li>{_esc(f)}</li>" for f in analysis.failures)
-            + "</ul></div>"
-        )
-    parts.append(_t_interval_html(result))
-    parts.append(_side_by_side_table(analysis))
-    parts.append(_lines_table(result))
-    bayesian = result.get("bayesian")
-    if bayesian:
-        parts.append(
-            f"<p class='note'>Model terms: {_esc(', '.join(bayesian['terms']))}. Prior: "
-            f"{_esc(bayesian['prior'])}. Bias: {_esc(bayesian['bias_definition'])}. "
-            f"Seed {bayesian['seed']}.</p>"
-        )
-        if bayesian.get("comparison"):
-            parts.append(
-                "<p><b>Where classical and Bayesian disagree:</b></p><ul>"
-                + "".join(f"<li>{_esc(note)}</li>" for note in bayesian["comparison"])
-                + "</ul>"
-            )
-    parts.append(_datasheet_html(analysis.datasheet))
-    parts.append(_image(allan_figure(analysis), f"{analysis.channel}: Allan deviation"))
-    if analysis.fit is not None:
-        if "spectrum" in analysis.bands:
-            parts.append(_image(spectrum_figure(analysis), f"{analysis.channel}: spectrum"))
-        parts.append(_image(pair_figure(analysis), f"{analysis.channel}: posterior pairs"))
-    if result.get("notes"):
-        parts.append(
-            "<p class='note'>Notes:</p><ul class='note'>"
-            + "".join(f"<li>{_esc(note)}</li>" for note in result["notes"])
-            + "</ul>"
-        )
-    if findings is not None:
-        parts.append(discovery_section(findings, unit=analysis.unit))
-    parts.append("</section>")
-    return "\n".join(parts)
+_FIGURES_NOTE = (
+    "<p class='note'>Allan figures: black points are the measured overlapping Allan "
+    "deviation with classical chi-square bars; the darker band is the model's exact Allan "
+    "deviation over posterior draws (parameter uncertainty), the lighter band the "
+    "posterior predictive band of what a recording like this one would measure (the same "
+    "with the estimator's chi-square scatter), both pointwise 90 %: about one point in ten "
+    "lies outside by chance; the dashed lines are the bounds of the model's Allan deviation "
+    "check (p-value Bonferroni-corrected over the taus, departures within 10 % tolerated), "
+    "outside which a point fails it. Spectrum figures: the binned periodogram "
+    "the Whittle likelihood fits, as the two-sided amplitude spectral density of the "
+    "samples (white noise reads N), against the model's expected periodogram.</p>"
+)
 
 
 def build_report(
@@ -1028,31 +851,28 @@ def build_report(
 ) -> str:
     """The self-contained HTML page of one sensor's channels.
 
-    ``discoveries`` maps a channel to its discovery findings (:func:`discovery_section`);
-    ``files`` names the JSON and netCDF files written beside the page; ``settings`` are shown
-    as given (name -> text).
+    ``discoveries`` maps a channel to its discovery (:class:`~bayescal.report._discovery.
+    Findings`); ``files`` names the JSON and netCDF files written beside the page;
+    ``settings`` are shown as given (name -> text).
     """
     discoveries = discoveries or {}
-    for analysis in analyses:
-        if analysis.fit is not None and not analysis.bands:
-            posterior_bands(analysis)
     failed = [a for a in analyses if not a.passed]
-    invalid = [a for a in analyses if not a.result["classical"]["t_interval_valid"]]
+    invalid = [a for a in analyses if not a.noise.classical.t_interval.valid]
     created = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{_esc(title)}</title><style>{_STYLE}</style></head><body>",
-        f"<h1>{_esc(title)}</h1>",
-        f"<p class='note'>{_esc(source)} — bayescal {_esc(version('bayescal'))}, {created}</p>",
+        f"<title>{esc(title)}</title><style>{STYLE}</style></head><body>",
+        f"<h1>{esc(title)}</h1>",
+        f"<p class='note'>{esc(source)} — bayescal {esc(version('bayescal'))}, {created}</p>",
     ]
     if failed:
         parts.append(
             "<div class='alarm'><h2>HEALTH CHECK FAILED</h2><p>The posterior of "
-            + ", ".join(f"<b>{_esc(a.channel)}</b>" for a in failed)
+            + ", ".join(f"<b>{esc(a.channel)}</b>" for a in failed)
             + " failed its checks; do not use those Bayesian numbers:</p><ul>"
-            + "".join(f"<li>{_esc(a.channel)}: {_esc('; '.join(a.failures))}</li>" for a in failed)
+            + "".join(f"<li>{esc(a.channel)}: {esc('; '.join(a.failures))}</li>" for a in failed)
             + "</ul></div>"
         )
     parts.append("<h2>Summary</h2>")
@@ -1061,7 +881,7 @@ def build_report(
         parts.append(
             "<p class='bad'>The classical Student-t interval of the bias is too narrow for "
             + ", ".join(
-                f"{_esc(a.channel)} (×{_num(a.result['classical']['t_interval_widening'], 3)})"
+                f"{esc(a.channel)} (×{num(a.noise.classical.t_interval.widening, 3)})"
                 for a in invalid
             )
             + ": the samples are correlated; see each channel's section for the widened "
@@ -1072,31 +892,52 @@ def build_report(
     if settings:
         parts.append(
             "<p class='note'>Settings: "
-            + "; ".join(f"{_esc(k)}: {_esc(v)}" for k, v in settings.items())
+            + "; ".join(f"{esc(k)}: {esc(v)}" for k, v in settings.items())
             + "</p>"
         )
     if files:
         parts.append(
             "<p class='note'>Behind this page: "
-            + "; ".join(f"{_esc(k)}: <code>{_esc(v)}</code>" for k, v in files.items())
+            + "; ".join(f"{esc(k)}: <code>{esc(v)}</code>" for k, v in files.items())
             + "</p>"
         )
-    parts.append(
-        "<p class='note'>Allan figures: black points are the measured overlapping Allan "
-        "deviation with classical chi-square bars; the darker band is the model's exact Allan "
-        "deviation over posterior draws (parameter uncertainty), the lighter band the "
-        "posterior predictive band of what a recording like this one would measure (the same "
-        "with the estimator's chi-square scatter). Spectrum figures: the binned periodogram "
-        "the Whittle likelihood fits, as the two-sided amplitude spectral density of the "
-        "samples (white noise reads N), against the model's expected periodogram.</p>"
-    )
+    parts.append(_FIGURES_NOTE)
     for analysis in analyses:
         parts.append(_channel_section(analysis, discoveries.get(analysis.channel)))
-    extra = [channel for channel in discoveries if channel not in {a.channel for a in analyses}]
-    for channel in extra:
-        parts.append(discovery_section(discoveries[channel]))
+    shown = {a.channel for a in analyses}
+    for channel, findings in discoveries.items():
+        if channel not in shown:
+            parts.append(discovery_section(findings))
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"
+
+
+def effects_document(analysis: ChannelAnalysis) -> dict:
+    """The JSON of a channel's model with the effects discovery found (``with_effects``): the
+    numbers the summary shows for it, and why."""
+    effects = analysis.effects
+    return {
+        "effects": list(effects.effects),
+        "terms": list(effects.terms),
+        "added_from_noise_model": list(effects.added),
+        "parameters": {
+            name: {**entry, **_display_entry(name, entry, analysis.unit)}
+            for name, entry in effects.parameters.items()
+        },
+        "interval": INTERVAL,
+        "diagnostics": effects.diagnostics.as_dict(),
+        "fit_checks": [check.as_dict() for check in effects.checks],
+        "passed": effects.passed,
+        "explanation": f"discovery found {', '.join(effects.effects)}, which the noise model "
+        f"({', '.join(analysis.noise.noise.terms)}) lacks and absorbed into its terms (its "
+        "numbers, under bayesian, are contaminated): the channel's noise numbers are this "
+        "model's, the noise model's terms and the effects together",
+    }
+
+
+def _display_entry(name: str, entry: dict, unit: str) -> dict:
+    shown = display_summary(name, entry, unit)
+    return {"display": shown} if shown else {}
 
 
 def report_document(
@@ -1108,7 +949,21 @@ def report_document(
     files: dict | None = None,
 ) -> dict:
     """The JSON behind the page: each channel's noise document, the posterior bands the
-    figures draw, the datasheet comparison and the discovery findings."""
+    figures draw, the datasheet comparison and the discovery documents."""
+    channels = {}
+    for a in analyses:
+        figures = {}
+        if a.allan is not None:
+            figures = {
+                "allan": a.allan.as_dict(a.unit),
+                "spectrum": a.spectrum.as_dict(f"{a.unit}/sqrt(Hz)"),
+            }
+        channels[a.channel] = {
+            **noise_document(a.noise),
+            "figures": figures,
+            **({"datasheet": a.datasheet.as_dict()} if a.datasheet else {}),
+            **({"with_effects": effects_document(a)} if a.effects else {}),
+        }
     return {
         "schema": "bayescal.report",
         "schema_version": 1,
@@ -1117,16 +972,9 @@ def report_document(
         "source": source,
         "files": files or {},
         "passed": all(a.passed for a in analyses),
-        "channels": {
-            a.channel: {
-                **a.result,
-                "figures": {
-                    name: {key: value for key, value in band.items()}
-                    for name, band in a.bands.items()
-                },
-                **({"datasheet": a.datasheet} if a.datasheet else {}),
-            }
-            for a in analyses
+        "channels": channels,
+        "discoveries": {
+            channel: discovery_document(findings)
+            for channel, findings in (discoveries or {}).items()
         },
-        "discoveries": discoveries or {},
     }

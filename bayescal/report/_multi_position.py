@@ -1,5 +1,6 @@
 """A multi-position calibration rendered: the JSON document of ``bayescal multi-position``
-and the table it prints."""
+(:func:`multi_position_result`) and the table it prints (:func:`multi_position_text`), both
+read from the :class:`~bayescal.MultiPositionCalibration`."""
 
 from importlib.metadata import version
 
@@ -7,7 +8,6 @@ from scipy import stats
 
 from ..capabilities._multi_position import MultiPositionCalibration, scale_unit
 from ..classical._multi_position import ClassicalCalibration, calibration_matrices
-from ..inference._mcmc import summarize
 from ..recording._units import parse_unit
 
 MODEL = {
@@ -53,7 +53,7 @@ def multi_position_result(
         "degrees_of_freedom": classical.dof,
         "residual_rms": {
             "value": classical.residual_rms,
-            "unit": unit if classical.six_face else "m/s^2",
+            "unit": _residual_unit(calibration),
             "of": "raw components m_i - M f_i - b"
             if classical.six_face
             else "magnitudes ||T K (m_i - b)|| - g",
@@ -125,12 +125,7 @@ def multi_position_result(
         "classical": block,
     }
     if bayesian is not None:
-        parameters = {
-            name: summarize(
-                bayesian.draws[name], units[name], bayesian.map_values[name], bayesian.map_sd[name]
-            )
-            for name in bayesian.names
-        }
+        parameters = calibration.summary
         result["bayesian"] = {
             "parameters": parameters,
             "model": "each pose mean Gaussian: white-noise covariance of a mean (per-axis "
@@ -174,48 +169,53 @@ def _comparison(classical: ClassicalCalibration, parameters: dict) -> list[str]:
     return notes
 
 
-def multi_position_text(result: dict) -> str:
-    classical = result["classical"]
-    percent = f"{100 * classical['confidence']:g}%"
-    poses = result["poses"]
-    gravity = result["gravity"]
-    residual = classical["residual_rms"]
+def _residual_unit(calibration: MultiPositionCalibration) -> str:
+    """The classical residual's unit: the readings' (six-face: raw components) or m/s^2
+    (free orientations: magnitudes)."""
+    return calibration.unit if calibration.classical.six_face else "m/s^2"
+
+
+def multi_position_text(
+    calibration: MultiPositionCalibration, *, channels, notes: list[str]
+) -> str:
+    """The table ``bayescal multi-position`` prints."""
+    classical, poses = calibration.classical, calibration.poses
+    percent = f"{100 * classical.confidence:g}%"
+    gravity = classical.gravity
+    bayesian = calibration.bayesian
     lines = [
-        f"bayescal multi-position: {','.join(result['channels'])} [{result['unit']}], "
-        f"{result['orientations']} orientations",
-        f"  poses: {poses['count']} ({poses['distinct_orientations']} distinct orientations); "
-        f"{poses['found_by']}",
-        f"  g_local {gravity['value']:.7g} +- {gravity['uncertainty']:.2g} m/s^2 "
-        f"(1 sd; {gravity['source']})",
-        f"  classical residual RMS {residual['value']:.3g} {residual['unit']} "
-        f"({classical['degrees_of_freedom']} degrees of freedom)",
+        f"bayescal multi-position: {','.join(channels)} [{calibration.unit}], "
+        f"{classical.orientations} orientations",
+        f"  poses: {poses.n} ({classical.distinct_orientations} distinct orientations); "
+        f"{calibration.found_by}",
+        f"  g_local {gravity.value:.7g} +- {gravity.uncertainty:.2g} m/s^2 "
+        f"(1 sd; {gravity.source})",
+        f"  classical residual RMS {classical.residual_rms:.3g} {_residual_unit(calibration)} "
+        f"({classical.dof} degrees of freedom)",
         "",
         f"  {'':17}{'classical (' + percent + ' half-width)':<32}"
-        f"{'Bayesian mean [90%]' if 'bayesian' in result else '':<44}unit",
+        f"{'Bayesian mean [90%]' if bayesian is not None else '':<44}unit",
     ]
-    bayesian = result.get("bayesian", {}).get("parameters", {})
-    for name, entry in classical["parameters"].items():
-        row = f"{entry['value']:.7g} +- {entry['uncertainty']:.2g}"
-        posterior = ""
-        if name in bayesian:
-            p = bayesian[name]
-            posterior = f"{p['mean']:.7g} [{p['q05']:.6g}, {p['q95']:.6g}]"
-        lines.append(f"  {name:<17}{row:<32}{posterior:<44}{entry['unit']}")
+    posterior = {} if bayesian is None else calibration.summary
+    units = calibration.units
+    for name, (value, uncertainty) in classical.parameters.items():
+        row = f"{value:.7g} +- {uncertainty:.2g}"
+        shown = ""
+        if name in posterior:
+            p = posterior[name]
+            shown = f"{p['mean']:.7g} [{p['q05']:.6g}, {p['q95']:.6g}]"
+        lines.append(f"  {name:<17}{row:<32}{shown:<44}{units[name]}")
     for name in ("pose_scatter", "g_local"):
-        if name in bayesian:
-            p = bayesian[name]
-            posterior = f"{p['mean']:.4g} [{p['q05']:.4g}, {p['q95']:.4g}]"
-            lines.append(f"  {name:<17}{'':<32}{posterior:<44}{p['unit']}")
-    if "bayesian" in result:
-        diagnostics = result["bayesian"]["diagnostics"]
+        if name in posterior:
+            p = posterior[name]
+            shown = f"{p['mean']:.4g} [{p['q05']:.4g}, {p['q95']:.4g}]"
+            lines.append(f"  {name:<17}{'':<32}{shown:<44}{p['unit']}")
+    if bayesian is not None:
+        diagnostics = bayesian.diagnostics
         lines.append(
             "  posterior checks "
-            + (
-                "passed"
-                if diagnostics["passed"]
-                else "FAILED: " + "; ".join(diagnostics["failures"])
-            )
+            + ("passed" if diagnostics.passed else "FAILED: " + "; ".join(diagnostics.failures))
         )
-        lines += [f"  - {note}" for note in result["bayesian"]["comparison"]]
-    lines += [f"  note: {note}" for note in result["notes"]]
+        lines += [f"  - {note}" for note in _comparison(classical, posterior)]
+    lines += [f"  note: {note}" for note in notes]
     return "\n".join(lines)

@@ -1,7 +1,17 @@
-"""The noise of one static channel, classical and Bayesian side by side, as the JSON document
-of ``bayescal noise`` and as the table it prints."""
+"""The noise of one static channel, classical and Bayesian side by side: what ``bayescal
+noise`` and each channel of the report render (:class:`NoiseAnalysis`), its JSON document
+(:func:`noise_document`) and the table ``bayescal noise`` prints (:func:`noise_text`).
+
+One home each: the analysis holds the typed results (the classical block, the
+:class:`~bayescal.NoiseFit`, the window it was read in, the notes); the document, the text
+and the page (:mod:`._html`) read it; what two of them show beyond its attributes (where a
+reading was taken, why the t-interval fails, where classical and Bayesian disagree) is
+written once, here.
+"""
 
 import math
+from dataclasses import dataclass
+from functools import cached_property
 from importlib.metadata import version
 from typing import TYPE_CHECKING
 
@@ -12,8 +22,85 @@ if TYPE_CHECKING:  # the Bayesian modules load only for a Bayesian result (--cla
     from ..capabilities._noise import NoiseFit
     from ..inference._noise_posterior import NoisePosterior
 
+INTERVAL = 0.90
+"""Probability of every posterior interval shown (5 % and 95 % quantiles)."""
+BIAS_DEFINITION = "turn-on bias: the expected reading at the start of the window"
 
-def _read_at(parameter: str, reading: SlopeReading) -> str:
+
+@dataclass(frozen=True)
+class Window:
+    """The stretch of the recording analysed, s, how it was chosen (``selected_by``: whole
+    record, start/stop, pad) and what the choice found (a pad window's liftoff ...)."""
+
+    start_s: float
+    stop_s: float
+    selected_by: str = "whole record"
+    details: dict | None = None
+    """More of how it was chosen (the pad search's liftoff, level and columns), as the JSON
+    holds it."""
+
+    @classmethod
+    def described(cls, description: dict) -> tuple["Window", tuple[str, ...]]:
+        """The window the command line describes (``start_s``, ``stop_s``, ``selected_by`` and
+        what a pad search found), and the notes it carries."""
+        details = dict(description)
+        start_s, stop_s = details.pop("start_s"), details.pop("stop_s")
+        selected_by = details.pop("selected_by", "whole record")
+        notes = tuple(details.pop("notes", ()))
+        return cls(start_s, stop_s, selected_by, details or None), notes
+
+    def as_dict(self) -> dict:
+        return {
+            "start_s": self.start_s,
+            "stop_s": self.stop_s,
+            "selected_by": self.selected_by,
+            **(self.details or {}),
+        }
+
+
+@dataclass(frozen=True)
+class NoiseAnalysis:
+    """The noise of one channel as ``bayescal noise`` and the report show it: the classical
+    numbers, the posterior beside them (None: classical only), where the channel comes from
+    and the window it was read in, with the notes gathered on the way."""
+
+    source: str
+    channel: str
+    unit: str
+    window: Window
+    classical: ClassicalNoise
+    noise: "NoiseFit | None" = None
+    notes: tuple[str, ...] = ()
+    """The window's notes, the channel's and the fit's, then any the caller adds."""
+
+    @classmethod
+    def of(cls, data, classical, window: Window, noise=None, notes=(), extra_notes=()):
+        """The analysis of ``data`` (a Channel or a NoiseFit: its source, name, unit and
+        notes), the window's ``notes`` first and ``extra_notes`` last."""
+        return cls(
+            source=data.source,
+            channel=data.channel,
+            unit=data.unit,
+            window=window,
+            classical=classical,
+            noise=noise,
+            notes=(*notes, *data.notes, *extra_notes),
+        )
+
+    @property
+    def fit(self) -> "NoisePosterior | None":
+        """The posterior itself (None: classical only)."""
+        return None if self.noise is None else self.noise.fit
+
+    @cached_property
+    def comparison(self) -> list[str]:
+        """Where classical and Bayesian disagree beyond their uncertainties, and why."""
+        if self.noise is None:
+            return []
+        return comparison_notes(self.classical, self.noise.fit, self.unit)
+
+
+def read_at(reading: SlopeReading) -> str:
     """Where a reading was taken, in words: the stretch of the curve it came from."""
     if reading.kind == "upper_bound":
         return f"upper bound, tightest at tau = {reading.tau_s:.3g} s: {reading.reason}"
@@ -30,7 +117,7 @@ def _reading(parameter: str, reading: SlopeReading, unit: str) -> dict:
         "kind": reading.kind,
         "tau_s": reading.tau_s,
         "local_slope": reading.local_slope,
-        "read_at": _read_at(parameter, reading),
+        "read_at": read_at(reading),
         "display": {
             label: {
                 "value": value,
@@ -41,7 +128,8 @@ def _reading(parameter: str, reading: SlopeReading, unit: str) -> dict:
     }
 
 
-def _t_interval_explanation(classical: ClassicalNoise) -> str:
+def t_interval_explanation(classical: ClassicalNoise) -> str:
+    """Why the Student-t interval of the bias holds, or by how much it is too narrow."""
     check = classical.t_interval
     interval = f"interval {check.ratio_ci_low:.2f}-{check.ratio_ci_high:.2f}"
     if check.valid and check.ratio_ci_high < 1.0:
@@ -65,6 +153,22 @@ def _t_interval_explanation(classical: ClassicalNoise) -> str:
     )
 
 
+def display_summary(name: str, summary, unit: str) -> dict[str, dict[str, float]]:
+    """A posterior summary of noise parameter ``name`` (its mean, q05 and q95: attributes or
+    keys) in the units datasheets use: label -> {mean, q05, q95}; empty for the bias or a unit
+    bayescal does not know."""
+    if name not in TERM_OF_PARAMETER:
+        return {}
+    values = {
+        key: summary[key] if isinstance(summary, dict) else getattr(summary, key)
+        for key in ("mean", "q05", "q95")
+    }
+    return {
+        label: {key: display_values(name, values[key], unit)[label] for key in values}
+        for label in display_values(name, values["mean"], unit)
+    }
+
+
 def _bayesian_block(fit: "NoisePosterior", unit: str) -> dict:
     from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN_ESS
 
@@ -82,13 +186,7 @@ def _bayesian_block(fit: "NoisePosterior", unit: str) -> dict:
         }
         if name in TERM_OF_PARAMETER:
             entry["term"] = TERM_OF_PARAMETER[name]
-            entry["display"] = {
-                label: {
-                    key: display_values(name, getattr(summary, key), unit)[label]
-                    for key in ("mean", "q05", "q95")
-                }
-                for label in display_values(name, summary.mean, unit)
-            }
+            entry["display"] = display_summary(name, summary, unit)
         parameters[name] = entry
     diagnostics = fit.diagnostics.as_dict()
     diagnostics["sampler"] = "emcee ensemble, differential-evolution moves"
@@ -101,8 +199,8 @@ def _bayesian_block(fit: "NoisePosterior", unit: str) -> dict:
     return {
         "terms": list(fit.terms),
         "prior": fit.problem.prior.description,
-        "bias_definition": "turn-on bias: the expected reading at the start of the window",
-        "interval": 0.90,
+        "bias_definition": BIAS_DEFINITION,
+        "interval": INTERVAL,
         "seed": fit.seed,
         "parameters": parameters,
         "diagnostics": diagnostics,
@@ -177,27 +275,23 @@ def _normal_quantile(confidence: float) -> float:
     return float(special.ndtri(0.5 + confidence / 2))
 
 
-def noise_result(
-    data, classical: ClassicalNoise, window: dict, noise: "NoiseFit | None" = None
-) -> dict:
-    """The JSON document of ``bayescal noise`` (contract in docs/guide/outputs.md). ``data``
-    names the channel: its ``source``, ``channel``, ``unit`` and ``notes`` (a Channel or a
-    NoiseFit); ``noise`` is the Bayesian fit, with its checks against the record and how its
-    terms were chosen."""
-    unit = data.unit
+def noise_document(analysis: NoiseAnalysis) -> dict:
+    """The JSON document of ``bayescal noise`` (contract in docs/guide/outputs.md): the
+    classical block, and with a posterior the Bayesian one with its checks against the record
+    and how its terms were chosen."""
+    classical, unit = analysis.classical, analysis.unit
     allan = classical.allan
-    half_width = (classical.bias_ci_high - classical.bias_ci_low) / 2
-    widening = classical.t_interval.widening
+    widened_low, widened_high = classical.widened_interval
     result = {
         "bayescal_version": version("bayescal"),
-        "source": data.source,
-        "channel": data.channel,
+        "source": analysis.source,
+        "channel": analysis.channel,
         "unit": unit,
         "n_samples": classical.n_samples,
         "rate_hz": classical.rate_hz,
         "duration_s": classical.duration_s,
-        "window": window,
-        "notes": list(data.notes),
+        "window": analysis.window.as_dict(),
+        "notes": list(analysis.notes),
         "classical": {
             "bias": {
                 "value": classical.bias,
@@ -206,18 +300,18 @@ def noise_result(
                 "confidence": classical.confidence,
                 "unit": unit,
                 "method": "sample mean, Student-t interval",
-                "widened_ci_low": classical.bias - widening * half_width,
-                "widened_ci_high": classical.bias + widening * half_width,
+                "widened_ci_low": widened_low,
+                "widened_ci_high": widened_high,
             },
             "std": {"value": classical.std, "unit": unit},
             "t_interval_valid": classical.t_interval.valid,
-            "t_interval_widening": widening,
+            "t_interval_widening": classical.t_interval.widening,
             "t_interval_check": {
                 "adev_ratio": classical.t_interval.ratio,
                 "adev_ratio_ci_low": classical.t_interval.ratio_ci_low,
                 "adev_ratio_ci_high": classical.t_interval.ratio_ci_high,
                 "tau_s": classical.t_interval.tau_s,
-                "explanation": _t_interval_explanation(classical),
+                "explanation": t_interval_explanation(classical),
             },
             "allan": {
                 "estimator": "overlapping Allan deviation (NIST SP 1065 eq. 11)",
@@ -237,6 +331,7 @@ def noise_result(
             },
         },
     }
+    noise = analysis.noise
     if noise is not None:
         bayesian = result["bayesian"] = _bayesian_block(noise.fit, unit)
         if noise.selection is not None:
@@ -249,7 +344,7 @@ def noise_result(
             bayesian["rounding"] = {
                 "lsb": noise.lsb,
                 "unit": unit,
-                "white_floor": noise.lsb / math.sqrt(12 * noise.rate_hz),
+                "white_floor": _white_floor(noise),
                 "output_white_level": noise.output_white_level,
                 "density_unit": parameter_unit("N", unit),
                 "explanation": "the samples sit on a grid of this step: their rounding error "
@@ -258,78 +353,65 @@ def noise_result(
             }
         if noise.lines is not None:
             bayesian["spectral_lines"] = noise.lines.as_dict()
-        bayesian["fit_checks"] = [
-            {key: check[key] for key in ("name", "statistic", "p_value", "location", "passed")}
-            | {"misfit": check["misfit"]}
-            for check in noise.checks
-        ]
+        bayesian["fit_checks"] = [check.as_dict() for check in noise.checks]
         bayesian["fits"] = noise.fits
-        bayesian["comparison"] = comparison_notes(classical, noise.fit, unit)
+        bayesian["comparison"] = analysis.comparison
     return result
+
+
+def _white_floor(noise: "NoiseFit") -> float:
+    """The rounding's white floor, LSB / sqrt(12 fs), unit/√Hz."""
+    return noise.lsb / math.sqrt(12 * noise.rate_hz)
 
 
 def _number(value: float) -> str:
     return "n/a" if value is None else f"{value:.5g}"
 
 
-def noise_text(result: dict) -> str:
-    """The table ``bayescal noise`` prints, made from its JSON document."""
-    classical = result["classical"]
-    unit = result["unit"]
-    bias = classical["bias"]
-    window = result["window"]
-    percent = f"{100 * bias['confidence']:g}%"
+def noise_text(analysis: NoiseAnalysis) -> str:
+    """The table ``bayescal noise`` prints."""
+    classical, unit, window = analysis.classical, analysis.unit, analysis.window
+    percent = f"{100 * classical.confidence:g}%"
     lines = [
-        f"bayescal noise: {result['source']}, channel {result['channel']} [{unit}]",
-        f"  {result['n_samples']} samples at {result['rate_hz']:.6g} Hz, "
-        f"{result['duration_s']:.6g} s (window {window['start_s']:.6g}-{window['stop_s']:.6g} s, "
-        f"{window['selected_by']})",
+        f"bayescal noise: {analysis.source}, channel {analysis.channel} [{unit}]",
+        f"  {classical.n_samples} samples at {classical.rate_hz:.6g} Hz, "
+        f"{classical.duration_s:.6g} s (window {window.start_s:.6g}-{window.stop_s:.6g} s, "
+        f"{window.selected_by})",
         "",
-        f"  bias          {_number(bias['value'])} {unit}   {percent} Student-t interval "
-        f"[{_number(bias['ci_low'])}, {_number(bias['ci_high'])}]",
-        f"  std           {_number(classical['std']['value'])} {unit}",
+        f"  bias          {_number(classical.bias)} {unit}   {percent} Student-t interval "
+        f"[{_number(classical.bias_ci_low)}, {_number(classical.bias_ci_high)}]",
+        f"  std           {_number(classical.std)} {unit}",
     ]
-    check = classical["t_interval_check"]
-    if classical["t_interval_valid"]:
-        lines.append(f"  t-interval    valid: {check['explanation']}")
+    explanation = t_interval_explanation(classical)
+    if classical.t_interval.valid:
+        lines.append(f"  t-interval    valid: {explanation}")
     else:
-        lines.append(f"  t-interval    NOT VALID: {check['explanation']}")
+        low, high = classical.widened_interval
+        lines.append(f"  t-interval    NOT VALID: {explanation}")
         lines.append(
-            f"                widened x{classical['t_interval_widening']:.3g}: "
-            f"[{_number(bias['widened_ci_low'])}, {_number(bias['widened_ci_high'])}] {unit}"
+            f"                widened x{classical.t_interval.widening:.3g}: "
+            f"[{_number(low)}, {_number(high)}] {unit}"
         )
-    allan = classical["allan"]
+    allan = classical.allan
     lines += [
         "",
-        f"  Allan deviation (overlapping), {100 * allan['confidence']:g}% chi-square "
+        f"  Allan deviation (overlapping), {100 * allan.confidence:g}% chi-square "
         "intervals (Greenhall EDF)",
         f"  {'tau [s]':>12} {'ADEV [' + unit + ']':>18} {'low':>12} {'high':>12} {'alpha':>6}",
     ]
     for tau, dev, low, high, alpha in zip(
-        allan["tau_s"],
-        allan["adev"],
-        allan["ci_low"],
-        allan["ci_high"],
-        allan["noise_alpha"],
-        strict=True,
+        allan.tau, allan.deviation, allan.ci_low, allan.ci_high, allan.alpha, strict=True
     ):
         lines.append(
             f"  {tau:>12.5g} {_number(dev):>18} {_number(low):>12} {_number(high):>12} {alpha:>6}"
         )
     lines += ["", "  IEEE 952 slope readings"]
-    for parameter, reading in classical["slope_readings"].items():
-        shown = f"{_number(reading['value'])} {reading['unit']}"
-        if reading["kind"] == "upper_bound":
-            shown = f"<= {_number(reading['ci_high'])} {reading['unit']}"
-        shown_key = "value" if reading["kind"] == "reading" else "ci_high"
-        extra = "".join(
-            f" = {_number(item[shown_key])} {label}" for label, item in reading["display"].items()
-        )
-        lines.append(f"  {parameter}  {shown}{extra}   ({reading['read_at']})")
-    if "bayesian" in result:
-        lines += _side_by_side(result)
-    if result["notes"]:
-        lines += ["", "  notes:"] + [f"  - {note}" for note in result["notes"]]
+    for parameter, reading in classical.slope_readings.items():
+        lines.append(_reading_line(parameter, reading, unit))
+    if analysis.noise is not None:
+        lines += _side_by_side(analysis)
+    if analysis.notes:
+        lines += ["", "  notes:"] + [f"  - {note}" for note in analysis.notes]
     return "\n".join(lines)
 
 
@@ -376,84 +458,102 @@ def lines_text(block: dict | None, unit: str) -> list[str]:
     return rows
 
 
-def _side_by_side(result: dict) -> list[str]:
-    classical, bayesian = result["classical"], result["bayesian"]
-    percent = f"{100 * classical['bias']['confidence']:g}%"
+def _reading_line(parameter: str, reading: SlopeReading, unit: str) -> str:
+    """An IEEE 952 reading as a line of the table, with its datasheet units."""
+    unit_of_parameter = parameter_unit(parameter, unit)
+    if reading.kind == "upper_bound":
+        shown, value = f"<= {_number(reading.ci_high)} {unit_of_parameter}", reading.ci_high
+    else:
+        shown, value = f"{_number(reading.value)} {unit_of_parameter}", reading.value
+    extra = "".join(
+        f" = {_number(converted)} {label}"
+        for label, converted in display_values(parameter, value, unit).items()
+    )
+    return f"  {parameter}  {shown}{extra}   ({read_at(reading)})"
+
+
+def _side_by_side(analysis: NoiseAnalysis) -> list[str]:
+    """The classical and Bayesian columns of ``bayescal noise``, the posterior's checks and
+    where the two disagree.
+
+    Over 80 lines: the table's blocks in the order printed (the terms chosen, the rounding,
+    the parameters, their datasheet units, the sampler's checks, the fit's)."""
+    classical, noise, unit = analysis.classical, analysis.noise, analysis.unit
+    fit = noise.fit
+    percent = f"{100 * classical.confidence:g}%"
     lines = [
         "",
         f"  classical ({percent} intervals) and Bayesian (posterior mean, 90% interval; "
-        f"MAP +- Laplace sd); terms: {', '.join(bayesian['terms'])}",
+        f"MAP +- Laplace sd); terms: {', '.join(fit.terms)}",
     ]
-    if "term_selection" in bayesian:
-        selection = bayesian["term_selection"]
+    if noise.selection is not None:
         lines.append(
-            "  terms chosen by evidence (kept at log BF >= "
-            f"{selection['threshold_log_bayes_factor']:.2f}):"
+            f"  terms chosen by evidence (kept at log BF >= {noise.selection.threshold:.2f}):"
         )
-        lines += [f"    {row['term']:<20}{row['reason']}" for row in selection["candidates"]]
-    if "rounding" in bayesian:
-        rounding = bayesian["rounding"]
+        lines += [f"    {trial.term:<20}{trial.reason}" for trial in noise.selection.trials]
+    if noise.lsb > 0:
         lines.append(
-            f"  samples on a grid of {_number(rounding['lsb'])} {rounding['unit']}: rounding's "
-            f"white floor {_number(rounding['white_floor'])} {rounding['density_unit']} kept "
-            f"out of N (output's white level {_number(rounding['output_white_level'])})"
+            f"  samples on a grid of {_number(noise.lsb)} {unit}: rounding's "
+            f"white floor {_number(_white_floor(noise))} {parameter_unit('N', unit)} kept "
+            f"out of N (output's white level {_number(noise.output_white_level)})"
         )
-    lines += lines_text(bayesian.get("spectral_lines"), result["unit"])
-    width = 2 + max(6, *(len(name) for name in bayesian["parameters"]))
+    lines += lines_text(None if noise.lines is None else noise.lines.as_dict(), unit)
+    width = 2 + max(6, *(len(name) for name in fit.parameters))
     lines.append(f"  {'':{width}}{'unit':<16}{'classical':<38}{'Bayesian':<40}MAP")
-    for name, entry in bayesian["parameters"].items():
+    readings = classical.slope_readings
+    for name, summary in fit.parameters.items():
         if name == "bias":
-            bias = classical["bias"]
             shown = (
-                f"{_number(bias['value'])} [{_number(bias['ci_low'])}, {_number(bias['ci_high'])}]"
+                f"{_number(classical.bias)} [{_number(classical.bias_ci_low)}, "
+                f"{_number(classical.bias_ci_high)}]"
             )
-        elif name in classical["slope_readings"]:
-            reading = classical["slope_readings"][name]
+        elif name in readings:
+            reading = readings[name]
             shown = (
-                f"<= {_number(reading['ci_high'])}"
-                if reading["kind"] == "upper_bound"
-                else f"{_number(reading['value'])} [{_number(reading['ci_low'])}, "
-                f"{_number(reading['ci_high'])}]"
+                f"<= {_number(reading.ci_high)}"
+                if reading.kind == "upper_bound"
+                else f"{_number(reading.value)} [{_number(reading.ci_low)}, "
+                f"{_number(reading.ci_high)}]"
             )
         else:
             shown = "-"
-        posterior = f"{_number(entry['mean'])} [{_number(entry['q05'])}, {_number(entry['q95'])}]"
+        posterior = f"{_number(summary.mean)} [{_number(summary.q05)}, {_number(summary.q95)}]"
         lines.append(
-            f"  {name:<{width}}{entry['unit']:<16}{shown:<38}{posterior:<40}"
-            f"{_number(entry['map'])} +- {_number(entry['map_sd'])}"
+            f"  {name:<{width}}{parameter_unit(name, unit):<16}{shown:<38}{posterior:<40}"
+            f"{_number(summary.map)} +- {_number(summary.map_sd)}"
         )
-    for name, entry in bayesian["parameters"].items():
-        for label, shown in entry.get("display", {}).items():
+    for name, summary in fit.parameters.items():
+        for label, shown in display_summary(name, summary, unit).items():
             lines.append(
                 f"  {name:<{width}}{label:<16}{'':<38}{_number(shown['mean'])} "
                 f"[{_number(shown['q05'])}, {_number(shown['q95'])}]"
             )
-    diagnostics = bayesian["diagnostics"]
-    if diagnostics["passed"]:
+    diagnostics = fit.diagnostics
+    if diagnostics.passed:
         lines.append(
-            f"  posterior checks passed: {diagnostics['n_steps']} steps x "
-            f"{diagnostics['n_walkers']} walkers, autocorrelation time <= "
-            f"{max(diagnostics['autocorr_time'].values()):.0f}, ESS >= "
-            f"{min(diagnostics['ess_bulk'].values()):.0f}, R-hat <= "
-            f"{max(diagnostics['rhat'].values()):.3f}, acceptance "
-            f"{diagnostics['acceptance_fraction']:.2f}"
+            f"  posterior checks passed: {diagnostics.n_steps} steps x "
+            f"{diagnostics.n_walkers} walkers, autocorrelation time <= "
+            f"{max(diagnostics.autocorr_time.values()):.0f}, ESS >= "
+            f"{min(diagnostics.ess_bulk.values()):.0f}, R-hat <= "
+            f"{max(diagnostics.rhat.values()):.3f}, acceptance "
+            f"{diagnostics.acceptance_fraction:.2f}"
         )
     else:
         lines.append("  POSTERIOR CHECKS FAILED — do not use these Bayesian numbers:")
-        lines += [f"    - {failure}" for failure in diagnostics["failures"]]
-    if bayesian["fits"]:
+        lines += [f"    - {failure}" for failure in diagnostics.failures]
+    if noise.fits:
         lines.append(
             "  the model fits the record: "
-            + ", ".join(check["name"].replace("_", " ") for check in bayesian["fit_checks"])
+            + ", ".join(check.name.replace("_", " ") for check in noise.checks)
             + " within the model's band"
         )
     else:
         lines.append("  MODEL MISFIT — the model does not describe this record:")
-        lines += [f"    - {check['misfit']}" for check in bayesian["fit_checks"] if check["misfit"]]
+        lines += [f"    - {check.misfit}" for check in noise.checks if check.misfit]
         lines.append(
             "    see bayescal discover for what the model leaves out"
-            + ("" if "term_selection" in bayesian else ", or let the record choose: --terms auto")
+            + ("" if noise.selection is not None else ", or let the record choose: --terms auto")
         )
-    if bayesian["comparison"]:
-        lines += ["", "  where they disagree:"] + [f"  - {note}" for note in bayesian["comparison"]]
+    if analysis.comparison:
+        lines += ["", "  where they disagree:"] + [f"  - {note}" for note in analysis.comparison]
     return lines

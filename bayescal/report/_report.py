@@ -9,36 +9,35 @@ Each is written atomically.
 """
 
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .._errors import InputError
 from .._output import file_stem, write_atomic, write_json, write_netcdf
 from ..capabilities._noise import fit_noise
-from ..inference._datatree import noise_datatree
 from ..inference._sampler import Sampler
-from ..models._terms import parse_terms
+from ..models._terms import parameter_unit, parse_terms
 from ..recording._recording import Channel, prepare_channel
 from ..recording._sensor_cards import find_card
-from ._html import (
-    ChannelAnalysis,
-    build_report,
-    datasheet_comparison,
-    posterior_bands,
-    report_document,
-)
-from ._noise import noise_result
+from ._html import ChannelAnalysis, build_report, report_document, with_bands, with_effects
+from ._noise import NoiseAnalysis, Window
 
 DEFAULT_TERMS = "auto"
 
 
-@dataclass
+@dataclass(frozen=True)
 class ReportOutcome:
+    """What a report wrote (the page, its JSON, each channel's posterior) and what it
+    shows: every channel's analysis, those whose checks failed, the discoveries by
+    channel."""
+
     html: Path
     json: Path
     posteriors: dict
     analyses: list
     failed: list
+    findings: dict = field(default_factory=dict)
+    """channel -> its :class:`~bayescal.report._discovery.Findings`."""
 
     @property
     def passed(self) -> bool:
@@ -57,7 +56,8 @@ def analyse_channel(
     window: dict | None = None,
 ) -> ChannelAnalysis:
     """Classical and Bayesian noise of one prepared channel, with the posterior bands of the
-    figures and, with a sensor card, the datasheet comparison."""
+    figures and, with a sensor card, the datasheet comparison. ``window``: how the window
+    was chosen (``selected_by`` and what a pad search found, with its notes)."""
     fit = fit_noise(
         data,
         terms=terms,
@@ -68,15 +68,11 @@ def analyse_channel(
         taus=taus,
         sampler=sampler,
     )
-    window = {"start_s": data.start_s, "stop_s": data.stop_s, **(window or {})}
-    window_notes = window.pop("notes", [])
-    result = noise_result(fit, fit.classical, window, fit)
-    result["notes"] = list(window_notes) + result["notes"]
-    analysis = ChannelAnalysis(data=data, classical=fit.classical, result=result, fit=fit.fit)
-    posterior_bands(analysis, seed=seed)
-    if card is not None:
-        analysis.datasheet = datasheet_comparison(card, analysis)
-    return analysis
+    described, notes = Window.described(
+        {"start_s": data.start_s, "stop_s": data.stop_s, **(window or {})}
+    )
+    noise = NoiseAnalysis.of(fit, fit.classical, described, fit, notes=notes)
+    return with_bands(noise, seed=seed, card=card)
 
 
 def report_recording(
@@ -108,10 +104,10 @@ def report_recording(
     ``options``: channel -> more arguments of :func:`~bayescal.recording._recording.
     prepare_channel` for it (its ``unit``, its ``scale``).
 
-    ``discoveries``: discovery findings to show on the page and keep in the JSON, either a
-    dict channel -> findings, or a function ``(table, data) -> findings or None`` called for
-    each channel with the recording and the channel's prepared data
-    (:class:`~bayescal.Channel`), after its noise analysis.
+    ``discoveries``: discoveries to show on the page and keep in the JSON, either a dict
+    channel -> :class:`~bayescal.report._discovery.Findings`, or a function ``(table, data)
+    -> Findings or None`` called for each channel with the recording and the channel's
+    prepared data (:class:`~bayescal.Channel`), after its noise analysis.
 
     ``sampler``: how every posterior is sampled; its ``progress`` also shows the report's own
     bar over the channels.
@@ -183,6 +179,18 @@ def report_recording(
                 bar.update(1)
         if not callable(discoveries):
             found_by_channel = dict(discoveries or {})
+        # Where discovery found what a channel's noise model lacks, its numbers come from the
+        # model that holds it (one more posterior for each such channel).
+        if bar is not None and found_by_channel:
+            bar.set_postfix_str("the models with discovery's effects")
+        analyses = [
+            with_effects(
+                analysis, found_by_channel[analysis.channel], seed=seed, sampler=sampler, card=card
+            )
+            if analysis.channel in found_by_channel
+            else analysis
+            for analysis in analyses
+        ]
         if bar is not None:
             bar.set_postfix_str("figures and files")
         outcome = write_report(
@@ -222,10 +230,7 @@ def write_report(
         if analysis.fit is None:
             continue
         path = folder / f"{stem}_{file_stem(analysis.channel)}_posterior.nc"
-        tree = noise_datatree(
-            analysis.fit, analysis.unit, channel=analysis.channel, source=analysis.data.source
-        )
-        write_netcdf(tree, path)
+        write_netcdf(analysis.noise.noise.posterior, path)
         posteriors[analysis.channel] = path
     files = {
         "JSON": json_path.name,
@@ -245,31 +250,72 @@ def write_report(
     )
     write_atomic(html_path, page)
     failed = [a for a in analyses if not a.passed]
-    return ReportOutcome(html_path, json_path, posteriors, analyses, failed)
+    return ReportOutcome(
+        html_path, json_path, posteriors, analyses, failed, dict(discoveries or {})
+    )
 
 
 def summary_text(outcome: ReportOutcome) -> str:
-    """The lines the command prints: one per channel, then where the page is."""
+    """The lines the command prints: one per channel (its noise from the model that holds
+    what discovery found on it, where it found something the noise model lacks), what
+    discovery found, then where the page is."""
     lines = []
     for analysis in outcome.analyses:
-        result = analysis.result
-        parameters = result["bayesian"]["parameters"]
-        unit = result["unit"]
-        noise = "  ".join(
-            f"{name} {parameters[name]['mean']:.3g} {parameters[name]['unit']}"
+        noise, unit, effects = analysis.noise, analysis.unit, analysis.effects
+        parameters = noise.noise.parameters
+        t_interval = noise.classical.t_interval
+        t_text = (
+            "t-interval valid"
+            if t_interval.valid
+            else f"t-interval too narrow x{t_interval.widening:.3g}"
+        )
+        health = "checks passed" if analysis.passed else "HEALTH CHECK FAILED"
+        if effects is None:
+            shown = "  ".join(
+                f"{name} {parameters[name].mean:.3g} {parameter_unit(name, unit)}"
+                for name in ("N", "B", "K")
+                if name in parameters
+            )
+            lines.append(
+                f"  {analysis.channel:<8} bias {parameters['bias'].mean:.6g} {unit}  {shown}  "
+                f"({t_text}; {health})"
+            )
+        else:
+            shown = "  ".join(
+                f"{name} {entry['mean']:.3g} {entry['unit']}"
+                for name, entry in effects.parameters.items()
+            )
+            lines.append(
+                f"  {analysis.channel:<8} with {' and '.join(effects.effects)}: {shown}  "
+                f"({t_text}; {health})"
+            )
+        findings = outcome.findings.get(analysis.channel)
+        if findings is not None:
+            lines += _discovery_lines(analysis, findings)
+    lines.append(f"report: {outcome.html}")
+    return "\n".join(lines)
+
+
+def _discovery_lines(analysis: ChannelAnalysis, findings) -> list[str]:
+    """What discovery found on a channel, and what the noise model read without it."""
+    discovery, indent = findings.discovery, " " * 11
+    if not discovery.effects:
+        return [f"{indent}discovery: nothing found (its baseline explains the record)"]
+    lines = []
+    for effect in discovery.effects:
+        score = effect.evidence.get("log_bayes_factor")
+        evidence = "" if score is None else f" (log Bayes factor {score:.1f})"
+        lines.append(f"{indent}discovery found {effect.name}{evidence}: {effect.explanation}")
+    effects = analysis.effects
+    if effects is not None:
+        parameters, unit = analysis.noise.noise.parameters, analysis.unit
+        absorbed = "  ".join(
+            f"{name} {parameters[name].mean:.3g} {parameter_unit(name, unit)}"
             for name in ("N", "B", "K")
             if name in parameters
         )
-        classical = result["classical"]
-        t_text = (
-            "t-interval valid"
-            if classical["t_interval_valid"]
-            else f"t-interval too narrow x{classical['t_interval_widening']:.3g}"
-        )
-        health = "checks passed" if analysis.passed else "HEALTH CHECK FAILED"
         lines.append(
-            f"  {analysis.channel:<8} bias {parameters['bias']['mean']:.6g} {unit}  {noise}  "
-            f"({t_text}; {health})"
+            f"{indent}the noise model without it ({', '.join(analysis.noise.noise.terms)}) "
+            f"read {absorbed}: contaminated, not shown above"
         )
-    lines.append(f"report: {outcome.html}")
-    return "\n".join(lines)
+    return lines

@@ -1,5 +1,6 @@
-"""A two-position calibration rendered: the JSON document of ``bayescal two-position`` and
-the table it prints."""
+"""A two-position calibration rendered: the JSON document of ``bayescal two-position``
+(:func:`two_position_result`) and the table it prints (:func:`two_position_text`), both read
+from the :class:`~bayescal.TwoPositionCalibration`."""
 
 from importlib.metadata import version
 
@@ -7,8 +8,10 @@ import numpy as np
 
 from ..capabilities._two_position import TwoPositionCalibration
 from ..classical._two_position import Section
-from ..inference._mcmc import summarize
 from ..recording._units import parse_unit
+
+_CLASSICAL = ("mean_up", "mean_down", "span", "scale", "offset")
+"""The classical answer's entries, in the order shown."""
 
 
 def _entry(value, uncertainty, unit):
@@ -29,12 +32,11 @@ def two_position_result(calibration: TwoPositionCalibration, found_by: str) -> d
     scale_unit = calibration.scale_unit
 
     def section(s: Section):
-        n = int(np.count_nonzero(~np.isnan(s.values)))
         return {
             "source": s.source,
             "start_s": s.start_s,
-            "stop_s": s.start_s + s.values.size / rate_hz,
-            "n_samples": n,
+            "stop_s": _stop_s(s, rate_hz),
+            "n_samples": _present(s),
         }
 
     block = {
@@ -72,12 +74,7 @@ def two_position_result(calibration: TwoPositionCalibration, found_by: str) -> d
         "classical": block,
     }
     if bayesian is not None:
-        draws, values, spread = bayesian.draws, bayesian.map_values, bayesian.map_sd
-        units = {"scale": scale_unit, "offset": unit, "g_local": "m/s^2"}
-        parameters = {
-            name: summarize(draws[name], units[name], values[name], spread[name])
-            for name in ("scale", "offset", "g_local")
-        }
+        parameters = calibration.summary
         noise = bayesian.noise
         result["bayesian"] = {
             "parameters": parameters,
@@ -96,24 +93,35 @@ def two_position_result(calibration: TwoPositionCalibration, found_by: str) -> d
                 "ess_bulk": noise.diagnostics.ess_bulk,
             },
             "fit_checks": [
-                {key: check[key] for key in ("name", "p_value", "location", "passed", "misfit")}
+                {key: value for key, value in check.as_dict().items() if key != "statistic"}
                 for check in bayesian.checks
             ],
             "fits": not bayesian.misfits,
-            "comparison": _comparison(classical, parameters, confidence),
+            "comparison": _comparison(calibration),
         }
         if bayesian.selection is not None:
             result["bayesian"]["term_selection"] = bayesian.selection.table
     return result
 
 
-def _comparison(classical: dict, parameters: dict, confidence: float) -> list[str]:
+def _stop_s(section: Section, rate_hz: float) -> float:
+    return section.start_s + section.values.size / rate_hz
+
+
+def _present(section: Section) -> int:
+    return int(np.count_nonzero(~np.isnan(section.values)))
+
+
+def _comparison(calibration: TwoPositionCalibration) -> list[str]:
+    """Where the posterior's uncertainty of the scale and offset exceeds the classical one
+    by half again, and why."""
     from scipy import stats
 
     notes = []
-    z = float(stats.norm.ppf(0.5 + confidence / 2))
+    z = float(stats.norm.ppf(0.5 + calibration.confidence / 2))
+    parameters = calibration.summary
     for name in ("scale", "offset"):
-        classical_sd = classical[name][1] / z
+        classical_sd = calibration.classical[name][1] / z
         ratio = parameters[name]["sd"] / classical_sd if classical_sd > 0 else float("inf")
         if ratio > 1.5:
             notes.append(
@@ -124,48 +132,49 @@ def _comparison(classical: dict, parameters: dict, confidence: float) -> list[st
     return notes
 
 
-def two_position_text(result: dict) -> str:
-    classical = result["classical"]
-    percent = f"{100 * classical['confidence']:g}%"
-    sections = result["sections"]
-    lines = [
-        f"bayescal two-position: channel {result['channel']} [{result['unit']}]",
-        f"  up   {sections['up']['start_s']:.6g}-{sections['up']['stop_s']:.6g} s, "
-        f"{sections['up']['n_samples']} samples ({sections['up']['source']})",
-        f"  down {sections['down']['start_s']:.6g}-{sections['down']['stop_s']:.6g} s, "
-        f"{sections['down']['n_samples']} samples ({sections['down']['source']})",
-        f"  sections: {sections['found_by']}",
-        f"  g_local {result['gravity']['value']:.7g} +- {result['gravity']['uncertainty']:.2g} "
-        f"m/s^2 (1 sd; {result['gravity']['source']})",
+def two_position_text(calibration: TwoPositionCalibration, found_by: str) -> str:
+    """The table ``bayescal two-position`` prints; ``found_by`` says where the sections came
+    from."""
+    percent = f"{100 * calibration.confidence:g}%"
+    rate_hz, gravity, bayesian = calibration.rate_hz, calibration.gravity, calibration.bayesian
+    lines = [f"bayescal two-position: channel {calibration.channel} [{calibration.unit}]"]
+    for name, section in (("up  ", calibration.up), ("down", calibration.down)):
+        lines.append(
+            f"  {name} {section.start_s:.6g}-{_stop_s(section, rate_hz):.6g} s, "
+            f"{_present(section)} samples ({section.source})"
+        )
+    lines += [
+        f"  sections: {found_by}",
+        f"  g_local {gravity.value:.7g} +- {gravity.uncertainty:.2g} "
+        f"m/s^2 (1 sd; {gravity.source})",
         "",
         f"  {'':10}{'classical (' + percent + ' half-width)':<42}"
-        f"{'Bayesian mean [90%]' if 'bayesian' in result else ''}",
+        f"{'Bayesian mean [90%]' if bayesian is not None else ''}",
     ]
-    for name in ("mean_up", "mean_down", "span", "scale", "offset"):
-        entry = classical[name]
-        row = f"  {name:<10}{entry['value']:.7g} +- {entry['uncertainty']:.3g} {entry['unit']:<14}"
-        if "bayesian" in result and name in result["bayesian"]["parameters"]:
-            p = result["bayesian"]["parameters"][name]
+    parameters = {} if bayesian is None else calibration.summary
+    for name in _CLASSICAL:
+        value, uncertainty = calibration.classical[name]
+        unit = calibration.scale_unit if name == "scale" else calibration.unit
+        row = f"  {name:<10}{value:.7g} +- {uncertainty:.3g} {unit:<14}"
+        if name in parameters:
+            p = parameters[name]
             row = f"{row:<54}{p['mean']:.7g} [{p['q05']:.7g}, {p['q95']:.7g}]"
         lines.append(row)
-    if "bayesian" in result:
-        bayesian = result["bayesian"]
+    if bayesian is not None:
+        noise = bayesian.noise
         lines.append(
-            "  noise: " + ", ".join(f"{n} {v['mean']:.3g}" for n, v in bayesian["noise"].items())
+            "  noise: "
+            + ", ".join(f"{n} {p.mean:.3g}" for n, p in noise.parameters.items() if n != "bias")
         )
-        diagnostics = bayesian["diagnostics"]
+        diagnostics = noise.diagnostics
         lines.append(
             "  posterior checks "
-            + (
-                "passed"
-                if diagnostics["passed"]
-                else "FAILED: " + "; ".join(diagnostics["failures"])
-            )
+            + ("passed" if diagnostics.passed else "FAILED: " + "; ".join(diagnostics.failures))
         )
-        if bayesian["fits"]:
+        if not bayesian.misfits:
             lines.append("  the noise model fits the sections (Allan deviation, spectrum, lag-1)")
         else:
             lines.append("  NOISE MODEL MISFIT — its intervals do not describe these sections:")
-            lines += [f"    - {c['misfit']}" for c in bayesian["fit_checks"] if c["misfit"]]
-        lines += [f"  - {note}" for note in bayesian["comparison"]]
+            lines += [f"    - {misfit}" for misfit in bayesian.misfits]
+        lines += [f"  - {note}" for note in _comparison(calibration)]
     return "\n".join(lines)

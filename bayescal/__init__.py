@@ -73,6 +73,8 @@ _EXPORTS = {
     "CheckResult": "capabilities._discovery",
     "plan_recording": "capabilities._plan",
     "RecordingPlan": "capabilities._plan",
+    "filter_noise": "capabilities._filter_noise",
+    "FilterNoise": "capabilities._filter_noise",
     "fit_fleet": "capabilities._fleet",
     "FleetFit": "capabilities._fleet",
 }

@@ -75,6 +75,8 @@ _EXPORTS = {
     "RecordingPlan": "capabilities._plan",
     "filter_noise": "capabilities._filter_noise",
     "FilterNoise": "capabilities._filter_noise",
+    "within_spec": "capabilities._within_spec",
+    "SpecCheck": "capabilities._within_spec",
     "fit_fleet": "capabilities._fleet",
     "FleetFit": "capabilities._fleet",
 }

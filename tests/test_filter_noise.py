@@ -235,3 +235,21 @@ def test_export_filter_command(run_cli, tmp_path):
         "rad/s/sqrt(Hz)"
     )
     assert "gyroscope_noise_density" in stdout
+
+
+def test_within_spec_states_the_density_convention():
+    # N = 0.005 deg/s/sqrt(Hz) = 0.3 deg/sqrt(h): draws spread around it.
+    rng = np.random.default_rng(0)
+    fit = fake_fit("gyro_x", "deg/s", {"N": 0.005, "K": 1e-4}, ("white", "rate_random_walk"))
+    draws = 0.005 * np.exp(0.01 * rng.standard_normal((4, 500)))
+    fit.fit.draws["N"] = draws
+    limit, label = "N<0.0052 deg/s/sqrt(Hz)", "N < 0.0052 deg/s/sqrt(Hz)"
+    two = bc.within_spec(fit, limit).summary[label]
+    one = bc.within_spec(fit, limit, psd="one_sided").summary[label]
+    assert two["probability"] == pytest.approx(np.mean(draws <= 0.0052))
+    assert two["probability"] > 0.99
+    # One-sided: the datasheet's 0.0052 is sqrt(2) N, so N must be below 0.00368.
+    assert one["limit_used"] == pytest.approx(0.0052 / math.sqrt(2))
+    assert one["probability"] == 0.0 and "one-sided" in one["convention"]
+    with pytest.raises(InputError, match="psd"):
+        bc.within_spec(fit, limit, psd="both")

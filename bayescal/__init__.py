@@ -74,6 +74,10 @@ _EXPORTS = {
     "CheckResult": "capabilities._discovery",
     "plan_recording": "capabilities._plan",
     "RecordingPlan": "capabilities._plan",
+    "filter_noise": "capabilities._filter_noise",
+    "FilterNoise": "capabilities._filter_noise",
+    "within_spec": "capabilities._within_spec",
+    "SpecCheck": "capabilities._within_spec",
     "fit_fleet": "capabilities._fleet",
     "FleetFit": "capabilities._fleet",
 }

@@ -9,8 +9,8 @@ from os import PathLike
 import numpy as np
 
 from .._errors import InputError
-from ..classical._noise import FLICKER_FLOOR
 from ..models._components import Components
+from ..models._terms import bounding_walk_variance
 from ..models._thermal import _drift_shape
 from ..models.effects._parameter import Context
 from ..navigation._alignment import MIN_ALIGNMENT_S, GyroPrior
@@ -146,7 +146,9 @@ def gyro_priors(old: dict, heat, rate_hz: float, si: float) -> tuple[GyroPrior, 
         noise = calibration.noise
         flicker = noise.get("B", {}).get("mean", 0.0) * si
         walk = noise.get("K", {}).get("mean", 0.0) * si
-        instability = walk**2 + 9 * FLICKER_FLOOR**2 * flicker**2 / duration
+        instability = walk**2 + bounding_walk_variance(
+            "bias_instability", {"B": flicker}, duration, rate_hz
+        )
         mean_variance = float(np.asarray(components.weights({"B": flicker, "K": walk})) @ window)
         powers = (heat[:, axis, None] - calibration.reference) ** np.arange(calibration.degree + 1)
         priors.append(

@@ -36,6 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
     # before (main), so that a Ctrl-C while they load ends as quietly as one later.
     from . import (
         _discover,
+        _export_filter,
         _fleet,
         _multi_position,
         _noise,
@@ -58,6 +59,7 @@ def build_parser() -> argparse.ArgumentParser:
         _sensors,
         _terms,
         _plan,
+        _export_filter,
         _fleet,
     ):
         command.add_parser(commands)

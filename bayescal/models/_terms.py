@@ -212,6 +212,30 @@ def display_values(name: str, value: float, channel_unit: str) -> dict[str, floa
     return {label: convert(value, unit, label) for label in labels}
 
 
+BOUNDING_FRACTION = 3.0
+"""A bias term's bounding random walk matches its Allan variance at the horizon over this."""
+
+
+def bias_terms(terms) -> tuple[str, ...]:
+    """The terms among ``terms`` that move the bias without being a random walk a navigation
+    filter models: those with long memory (bias instability, Gauss-Markov) and the ramp."""
+    return tuple(t for t in terms if TERMS[t].long_memory or TERMS[t].mean_rate is not None)
+
+
+def bounding_walk_variance(term: str, values: dict, horizon_s: float, rate_hz: float) -> float:
+    """The power spectral density q^2 of the random walk that stands for bias term ``term``
+    over ``horizon_s`` seconds: the walk whose Allan variance, q^2 tau / 3, equals the term's
+    at tau = horizon / :data:`BOUNDING_FRACTION`, so q^2 = 9 sigma_A^2(H / 3) / H (unit^2/s
+    for a channel in unit; for flicker, 9 (2 ln 2 / pi) B^2 / H, IEEE Std 952 eq. C.9). Below
+    that tau the walk holds less than the term, beyond it more; a third of the horizon is
+    where a filter's estimate of the bias over the horizon is most sensitive to it (the fine
+    alignment's 20-minute coverage, benchmarks/infield_alignment.py, and the filter
+    consistency benchmark, benchmarks/filter_consistency.py)."""
+    tau = horizon_s / BOUNDING_FRACTION
+    variance = float(TERMS[term].allan_variance(tau, values, rate_hz))
+    return 3.0 * variance / tau
+
+
 def card_values(card, channel_unit: str) -> dict[str, tuple[float, str]]:
     """The noise parameters a sensor card gives for a channel in ``channel_unit`` (its
     section for that kind of sensor, :meth:`~bayescal.SensorCard.section`), each in its unit

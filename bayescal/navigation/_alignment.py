@@ -57,7 +57,7 @@ import numpy as np
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
 from ..classical._gravity import normal_gravity
-from ..classical._noise import FLICKER_FLOOR
+from ..models._terms import bounding_walk_variance
 from ._error_model import (
     NAVIGATION_STATES,
     POSITION,
@@ -373,7 +373,9 @@ def fine_alignment(
     n = len(layout.names)
     full, *inputs = _dynamics(trajectory, priors, layout, size, count, height, gravity)
     densities = (white_noise_density(gyro, rate_hz), white_noise_density(accel, rate_hz))
-    accel_walk = 9 * FLICKER_FLOOR**2 * accel_instability**2 / duration
+    accel_walk = bounding_walk_variance(
+        "bias_instability", {"B": accel_instability}, duration, rate_hz
+    )
     noise = _noise(layout, priors, inputs, densities, accel_walk)
     transition, process = discretize(jnp.asarray(full), jnp.asarray(noise), step_s)
     prior, shape, scale = _prior(layout, priors, reference_drift, duration)

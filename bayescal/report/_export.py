@@ -59,23 +59,17 @@ from pathlib import Path
 
 from .._errors import InputError
 from .._output import Outputs, check_writable, to_jsonable, write_atomic
-from ..recording._units import parse_unit
+from ..capabilities._estimators import ESTIMATORS, SENSORS, SI, sensor_of_unit
 from ._noise import INTERVAL, NoiseAnalysis, read_at
 
 FORMATS = ("kalibr", "matlab")
-SENSORS = ("accelerometer", "gyroscope")
-_SENSOR_OF_QUANTITY = {"angular_rate": "gyroscope", "acceleration": "accelerometer"}
-_SI = {"gyroscope": "rad/s", "accelerometer": "m/s^2"}
-# Kalibr's units, as its wiki writes them.
+_KALIBR = ESTIMATORS["kalibr"]
+# Kalibr's units and keys, from the one home of the estimators' conventions.
 _KALIBR_UNITS = {
-    ("gyroscope", "N"): "rad/s/sqrt(Hz)",
-    ("gyroscope", "K"): "rad/s^2/sqrt(Hz)",
-    ("gyroscope", "B"): "rad/s",
-    ("accelerometer", "N"): "m/s^2/sqrt(Hz)",
-    ("accelerometer", "K"): "m/s^3/sqrt(Hz)",
-    ("accelerometer", "B"): "m/s^2",
+    **{(s, p): _KALIBR.unit(s, p) for s in SENSORS for p in ("N", "K")},
+    **{(s, "B"): SI[s] for s in SENSORS},
 }
-_KALIBR_KEYS = {"N": "noise_density", "K": "random_walk"}
+_KALIBR_KEYS = {p: _KALIBR.keys["gyroscope", p].removeprefix("gyroscope_") for p in ("N", "K")}
 _KALIBR_TOP = ("rostopic", "update_rate", "bayescal")
 _PLACEHOLDER_TOPIC = "/imu0"
 _MATLAB_VARIABLE = {"gyroscope": "gyro", "accelerometer": "accel"}
@@ -129,20 +123,6 @@ def _number(value: float) -> str:
     """A float every YAML reader (PyYAML's YAML 1.1 included) and MATLAB reads as one:
     mantissa with a point, exponent with a sign."""
     return f"{value:.9e}"
-
-
-def sensor_of_unit(unit: str, channel: str, source: str | None = None) -> tuple[str, float]:
-    """The sensor a channel in ``unit`` belongs to and the factor from ``unit`` to SI."""
-    parsed = parse_unit(unit)
-    sensor = _SENSOR_OF_QUANTITY.get(parsed.quantity)
-    if sensor is None:
-        raise InputError(
-            f"--export needs an angular rate or an acceleration, but the channel is in '{unit}'",
-            source=source,
-            column=channel,
-            fix="pass --unit (deg/s, rad/s, m/s^2, g ...) for a channel in counts",
-        )
-    return sensor, parsed.to_si
 
 
 def noise_estimates(analysis: NoiseAnalysis, to_si: float) -> dict[str, Estimate]:

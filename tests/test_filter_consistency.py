@@ -1,0 +1,73 @@
+"""The filter consistency check in small (benchmarks/filter_consistency.py is the full study):
+a MEMS IMU with flicker on a moving vehicle with position fixes; a filter told the white noise
+and the bias's walk as bc.filter_noise makes them (the bias instability bounded over the
+filter's horizon) has the covariance of its errors, one told the bare Allan-line values is
+overconfident."""
+
+import math
+
+import numpy as np
+import pytest
+
+from bayescal.classical._noise import classical_noise
+from bayescal.models._noise_model import NoiseModel
+from bayescal.models._terms import bounding_walk_variance
+from bayescal.navigation._consistency import (
+    Grade,
+    Scenario,
+    filter_model,
+    nees_band,
+    scores,
+    setup,
+    simulate_runs,
+)
+
+DEG = math.pi / 180
+G = 9.80665
+RATE = 50.0
+MEMS = Grade(
+    gyro={"N": 0.3 / 60 * DEG, "B": 10 / 3600 * DEG, "K": 2 / 3600 / 60 * DEG},
+    accel={"N": 100e-6 * G, "B": 50e-6 * G, "K": 2e-5},
+    gyro_bias_sd=100 / 3600 * DEG,
+    accel_bias_sd=5e-3,
+)
+HORIZON_S = 60.0
+
+
+def _exported(truth: dict) -> tuple[float, float]:
+    walk = truth["K"] ** 2 + bounding_walk_variance("bias_instability", truth, HORIZON_S, RATE)
+    return truth["N"], math.sqrt(walk)
+
+
+def _allan_line(truth: dict, seed: int) -> tuple[float, float]:
+    record = NoiseModel(rate_hz=RATE, **truth).simulate(round(1800 * RATE), seed=seed)
+    readings = classical_noise(record, RATE).slope_readings
+    return readings["N"].value, readings["K"].value
+
+
+@pytest.fixture(scope="module")
+def drives():
+    scenario = Scenario(duration_s=300.0, rate_hz=RATE)
+    prepared = setup(scenario)
+    truth, fixes = simulate_runs(prepared, MEMS, runs=8, seed=3)
+    return prepared, truth, fixes
+
+
+def _inside(drives, white, walk):
+    prepared, truth, fixes = drives
+    model, scale = filter_model(prepared, MEMS, white, walk)
+    nees, _ = scores(model, scale, truth, fixes)
+    low, high = nees_band(model, 200, seed=11)
+    return np.mean((nees >= low) & (nees <= high)), np.mean(nees > high)
+
+
+def test_exported_values_make_a_consistent_filter(drives):
+    gyro, accel = _exported(MEMS.gyro), _exported(MEMS.accel)
+    inside, _ = _inside(drives, (gyro[0], accel[0]), (gyro[1], accel[1]))
+    assert inside >= 0.75
+
+
+def test_the_bare_allan_line_makes_an_overconfident_filter(drives):
+    gyro, accel = _allan_line(MEMS.gyro, 1), _allan_line(MEMS.accel, 2)
+    _, above = _inside(drives, (gyro[0], accel[0]), (gyro[1], accel[1]))
+    assert above >= 0.75

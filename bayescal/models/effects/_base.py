@@ -56,6 +56,10 @@ class Search(Protocol):
     def line_frequency(self, fit) -> float:
         """The frequency of the strongest spectral line the fit leaves in its residual."""
 
+    def level_event(self, fit, kind: str):
+        """The time of the strongest departure of ``kind`` (``"step"``) the level scan of
+        the fit locates, and the search's record; None where it locates none."""
+
     def summarize(self, draws, unit: str) -> dict:
         """Mean, sd, 5 % and 95 % quantiles of posterior draws, with the unit."""
 

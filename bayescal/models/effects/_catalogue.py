@@ -5,6 +5,7 @@ for an effect decided on the samples themselves, ``SAMPLE``).
 """
 
 from .bias_instability import BiasInstability
+from .bias_step import BiasStep
 from .earth_rotation import EarthRotation
 from .g_sensitivity import GSensitivity
 from .gauss_markov import GaussMarkov
@@ -29,6 +30,7 @@ SEARCHED = (
     WarmupTransient,
     Sinusoid,
     GSensitivity,
+    BiasStep,
 )
 """The effects discovery proposes in each round, in this order."""
 SAMPLE = (Saturation, Outliers)

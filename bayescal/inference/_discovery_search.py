@@ -56,6 +56,7 @@ from ..models._terms import (
 )
 from ..models.effects._base import Effect
 from ..models.effects._catalogue import SEARCHED
+from ..models.effects.noise_burst import NoiseBurst
 from ..models.effects.outliers import Outliers, outlier_scan, without_outliers
 from ..models.effects.output_filter import OutputFilter
 from ..models.effects.quantization import Quantization
@@ -155,13 +156,20 @@ def search_effects(
         )
     if "white" not in baseline:
         baseline = ("white", *baseline)
-    saturation, unclipped, outliers, clean = _sample_effects(data.values, seed)
-    context = Context.of(data, unclipped, clean)
+    saturation, unclipped = _saturation(data.values, seed)
     report("fitting the baseline")
+    context = Context.of(data, unclipped, unclipped)
     baseline_fit = fit_model(context, ModelSpec.from_names(baseline))
     baseline_checks = run_checks(baseline_fit, data)
+    burst = _burst(baseline_checks, data)
+    descaled = burst[0].descaled(unclipped, data.rate_hz) if burst else unclipped
+    outliers = _decisive(outlier_scan(descaled))
+    clean = without_outliers(descaled, outliers["flagged"]) if outliers else descaled
+    if burst or outliers:
+        context = Context.of(data, unclipped, clean)
+        baseline_fit = fit_model(context, ModelSpec.from_names(baseline))
     context, current, findings = _decided_before_search(
-        context, baseline_fit, baseline, baseline_checks, saturation, outliers
+        context, baseline_fit, baseline, baseline_checks, saturation, outliers, burst
     )
     checks = baseline_checks if not findings else run_checks(current, data)
     current, checks, searched, undecided = _search(context, current, checks, max_effects, report)
@@ -185,27 +193,59 @@ def _decisive(scan: dict | None) -> dict | None:
     return scan if scan and scan["log_bayes_factor"] > DECISIVE_LOG_BAYES_FACTOR else None
 
 
-def _sample_effects(values: np.ndarray, seed: int):
-    """The sample-level scans: (saturation, the samples with the clipped ones imputed,
-    outliers, those with the outliers replaced); a scan is None where it is not decisive."""
+def _saturation(values: np.ndarray, seed: int):
+    """The saturation scan (None where it is not decisive) and the samples with the clipped
+    ones imputed."""
     saturation = _decisive(saturation_scan(values))
     unclipped = (
         impute_clipped(values, saturation, np.random.default_rng(seed)) if saturation else values
     )
-    outliers = _decisive(outlier_scan(unclipped))
-    clean = without_outliers(unclipped, outliers["flagged"]) if outliers else unclipped
-    return saturation, unclipped, outliers, clean
+    return saturation, unclipped
+
+
+def _burst(checks: list[dict], data) -> tuple | None:
+    """A noise burst the baseline's variance scan located, with its scan as a decision
+    (:func:`_decisive`): log Bayes factor the likelihood ratio less the Schwarz cost of the
+    ratio and the log of the stretches tried; ELPD gain the ratio less its AIC cost (start,
+    duration, ratio). Decided before the glitch scan, which would take a burst's samples for
+    glitches. None where there is none, or it is not decisive."""
+    (scan,) = [check for check in checks if check["name"] == "variance_scan"]
+    if scan["passed"] or "places" not in scan:
+        return None
+    effect = NoiseBurst.from_scan(scan, data.duration_s)
+    if effect is None:
+        return None
+    ratio = scan["log_likelihood_ratio"]
+    n_frequencies = np.count_nonzero(np.isfinite(data.values)) // 2
+    decision = _decisive(
+        {
+            "log_bayes_factor": ratio - 0.5 * math.log(n_frequencies) - math.log(scan["places"]),
+            "delta_elpd": ratio - 3.0,
+            "delta_elpd_se": math.sqrt(2 * ratio),
+            "shape_in": scan["shapes"][0],
+            "shape_out": scan["shapes"][1],
+            "block_s": scan["location"]["block_s"],
+            "band_hz": scan["location"]["band_hz"],
+        }
+    )
+    return (effect, decision) if decision else None
 
 
 def _decided_before_search(
-    context: Context, current: ModelFit, baseline, baseline_checks, saturation, outliers
+    context: Context, current: ModelFit, baseline, baseline_checks, saturation, outliers, burst
 ) -> tuple[Context, ModelFit, list]:
-    """The effects named before the search: clipping and glitches (from their scans), the
+    """The effects named before the search: clipping, a noise burst and glitches (from their
+    scans), the
     grid the samples sit on, and the output filter when the baseline misses power near
     Nyquist. Returns the context (with the filter, if one was decided), the model with them
     and their findings."""
     findings = []
-    for effect, scan in ((Saturation(), saturation), (Outliers(), outliers)):
+    burst_effect, burst_scan = burst or (None, None)
+    for effect, scan in (
+        (Saturation(), saturation),
+        (burst_effect, burst_scan),
+        (Outliers(), outliers),
+    ):
         if scan:
             current = fit_model(context, current.spec.with_effect(effect))
             findings.append(
@@ -216,7 +256,7 @@ def _decided_before_search(
                     scan["delta_elpd"],
                     scan["delta_elpd_se"],
                     (),
-                    {},
+                    scan if effect is burst_effect else {},
                 )
             )
     if context.lsb > 0:

@@ -263,6 +263,11 @@ def variance_scan(fit: ModelFit, rate_hz: float, unit: str) -> dict:
     }
     return {
         "name": "variance_scan",
+        "places": len(spans),
+        "log_likelihood_ratio": float(
+            _signed_root(inside, total, a_block * count, a_block * (blocks - count)) ** 2 / 2
+        ),
+        "shapes": [float(a_block * count), float(a_block * (blocks - count))],
         "statistic": float(abs(z[worst])),
         "p_value": p_value,
         "location": location,

@@ -54,7 +54,7 @@ from ..models._terms import (
     PARAMETERS_OF_TERM,
     parameter_unit,
 )
-from ..models.effects._base import Effect
+from ..models.effects._base import Effect, SlotTerm
 from ..models.effects._catalogue import SEARCHED
 from ..models.effects.noise_burst import NoiseBurst
 from ..models.effects.outliers import Outliers, outlier_scan, without_outliers
@@ -132,6 +132,52 @@ class SearchResult(eqx.Module):
     """(name, log Bayes factor) of the best candidate when the search stopped with a check
     still failing because no term was decisive; empty otherwise."""
     saturation: dict | None = None
+    withdrawn: tuple = ()
+    """Findings the search accepted and then withdrew: a check of their band still failed
+    with them in the model (:func:`withdrawn_findings`)."""
+
+
+def check_band(check: dict, rate_hz: float) -> str | None:
+    """The band a failing check locates its mismatch in, in the catalogue's words (an
+    effect's :attr:`~bayescal.models.effects._base.Effect.band`): "line", "high" (the
+    spectrum or the Allan deviation only toward Nyquist), "noise" (the local power over
+    time), "samples" (tails, a grid), else "low"; None for a check no term answers."""
+    name, location = check["name"], check["location"]
+    if name in UNMODELLED_CHECKS:
+        return None
+    if name == "spectral_line":
+        return "line"
+    if name == "spectrum_bands":
+        return "high" if location["frequency_hz"][0] >= HIGH_FREQUENCY_FRACTION * rate_hz else "low"
+    if name == "allan_deviation":
+        longest = max(location.get("tau_range_s", [location.get("tau_s", math.inf)]))
+        return "high" if longest <= 1.0 / (HIGH_FREQUENCY_FRACTION * rate_hz) else "low"
+    if name == "variance_scan":
+        return "noise"
+    if name in ("tails", "discrete_levels"):
+        return "samples"
+    return "low"
+
+
+def withdrawn_findings(findings, checks: list[dict], rate_hz: float) -> list:
+    """The search's findings that are not named, because the model with them still fails a
+    check they should have answered: the check that locates them, or (for a term not tied to
+    a covariate) any check of their band; a stationary noise term also when the local power
+    departs over time (a variance that changes is not a stationary term's). A catalogue
+    entry that absorbs part of a mismatch it does not explain is the nearest wrong name."""
+    failing = [check for check in checks if not check["passed"]]
+    names = {check["name"] for check in failing}
+    bands = {check_band(check, rate_hz) for check in failing} - {None}
+    withdrawn = []
+    for finding in findings:
+        effect = finding.effect
+        own = effect.located_by in names
+        covariate = effect.located_by.startswith("residual_vs_")
+        in_band = effect.band in bands and not covariate
+        stationary = isinstance(effect, SlotTerm) and "noise" in bands
+        if own or in_band or stationary:
+            withdrawn.append(finding)
+    return withdrawn
 
 
 def search_effects(
@@ -163,7 +209,11 @@ def search_effects(
     baseline_checks = run_checks(baseline_fit, data)
     burst = _burst(baseline_checks, data)
     descaled = burst[0].descaled(unclipped, data.rate_hz) if burst else unclipped
-    outliers = _decisive(outlier_scan(descaled))
+    # A noise level that changes and stays (no burst) makes the samples' distribution a
+    # mixture of two spreads, which the glitch scan would take for glitches: it is left to
+    # the variance scan, which reports it unexplained.
+    changing = not burst and _failed(baseline_checks, "variance_scan")
+    outliers = None if changing else _decisive(outlier_scan(descaled))
     clean = without_outliers(descaled, outliers["flagged"]) if outliers else descaled
     if burst or outliers:
         context = Context.of(data, unclipped, clean)
@@ -172,7 +222,17 @@ def search_effects(
         context, baseline_fit, baseline, baseline_checks, saturation, outliers, burst
     )
     checks = baseline_checks if not findings else run_checks(current, data)
+    before_search = current
     current, checks, searched, undecided = _search(context, current, checks, max_effects, report)
+    withdrawn = withdrawn_findings(searched, checks, data.rate_hz)
+    if withdrawn:
+        report(f"withdrawing {', '.join(f.name for f in withdrawn)}: checks still fail there")
+        searched = [finding for finding in searched if finding not in withdrawn]
+        spec = before_search.spec
+        for finding in searched:
+            spec = spec.with_effect(finding.effect)
+        current = fit_model(context, spec)
+        checks = run_checks(current, data)
     report("checking the final model")
     return SearchResult(
         context=context,
@@ -185,6 +245,7 @@ def search_effects(
         outliers=outliers,
         undecided=undecided,
         saturation=saturation,
+        withdrawn=tuple(withdrawn),
     )
 
 
@@ -201,6 +262,10 @@ def _saturation(values: np.ndarray, seed: int):
         impute_clipped(values, saturation, np.random.default_rng(seed)) if saturation else values
     )
     return saturation, unclipped
+
+
+def _failed(checks: list[dict], name: str) -> bool:
+    return any(check["name"] == name and not check["passed"] for check in checks)
 
 
 def _burst(checks: list[dict], data) -> tuple | None:

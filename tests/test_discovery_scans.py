@@ -76,3 +76,30 @@ def test_a_burst_and_a_step_of_the_noise_level_are_told_apart_and_located():
     assert check["p_value"] < CHECK_LEVEL and location["shape"] == "noise level step"
     assert abs(location["time_s"] - 100.0) <= location["block_s"]
     assert location["variance_ratio"] == pytest.approx(1.69, rel=0.1)
+
+
+def test_discovery_names_a_step_and_leaves_a_noise_level_step_unexplained():
+    """Through discover: a bias step of 0.3 sample sd at 40 % of an 11-minute record is named
+    ``bias_step`` alone, at its time; the noise sd raised by 40 % from 60 % of the record on
+    (not in the catalogue) names nothing — not ``outliers``, not a noise term — and is
+    reported unexplained as a step of the noise level at its time, with advice that does not
+    ask for a longer record."""
+    import bayescal as bc
+
+    rng = np.random.default_rng(8)
+    rate, n = 50.0, 2**15
+    values = WHITE_SD * rng.standard_normal(n)
+    values[int(0.4 * n) :] += 0.3 * WHITE_SD
+    found = bc.discover(values, rate, unit="deg/s", posterior=False)
+    assert [effect.name for effect in found.effects] == ["bias_step"]
+    assert abs(found.effects[0].location["time_s"] - 0.4 * n / rate) < 5.0
+    assert found.unexplained is None
+    values = WHITE_SD * rng.standard_normal(n)
+    values[int(0.6 * n) :] *= 1.4
+    found = bc.discover(values, rate, unit="deg/s", posterior=False)
+    assert found.effects == ()
+    (mismatch,) = [m for m in found.unexplained["mismatches"] if m["check"] == "variance_scan"]
+    assert mismatch["shape"] == "noise level step"
+    assert abs(mismatch["time_s"] - 0.6 * n / rate) <= 2 * 64 / rate  # two blocks
+    assert mismatch["variance_ratio"] == pytest.approx(1.96, rel=0.1)
+    assert "record longer" not in found.unexplained["explanation"]

@@ -320,6 +320,6 @@ def _excess_band(ratios, frequency, first: int, last: int, ratio: float):
         departures.append(departure if ratio >= 1 else -departure)
         bands.append([float(frequency[members].min()), float(frequency[members].max())])
     departures = np.array(departures)
-    if departures.min() > 0.5 * departures.max():  # every octave departs alike: broadband
+    if bool(departures.min() > 0.5 * departures.max()):  # every octave departs alike
         return [float(frequency[0]), float(frequency[-1])], True
     return bands[int(np.argmax(departures))], False

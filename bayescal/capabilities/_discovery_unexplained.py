@@ -30,13 +30,15 @@ def _slowest_period(check: dict) -> float | None:
     return None
 
 
-def _mismatch(check: dict, rate_hz: float, duration_s: float, unit: str) -> dict:
+def _mismatch(check: dict, rate_hz: float, duration_s: float, in_time: bool) -> dict:
     """One failing check of the final model described for a user: where (time and/or
-    frequency), what it looks like, how large, and what to do about it."""
+    frequency), what it looks like, how large, and what to do about it. ``in_time``: a scan
+    located a departure in time, which is then what a slow mismatch of the spectrum or the
+    Allan deviation is (not too little data)."""
     name, where = check["name"], check["location"]
     entry = {"check": name, "band": check_band(check, rate_hz), "p_value": check["p_value"]}
     slowest_s = _slowest_period(check)
-    short = slowest_s is None or ENOUGH_CYCLES * slowest_s > duration_s
+    short = (slowest_s is None or ENOUGH_CYCLES * slowest_s > duration_s) and not in_time
     match name:
         case "level_scan":
             shape, time_s, size = where["shape"], where["time_s"], where["size"]
@@ -113,7 +115,12 @@ def _mismatch(check: dict, rate_hz: float, duration_s: float, unit: str) -> dict
                     "tau_s": where.get("tau_range_s", where.get("tau_s")),
                     "adev_over_model": where.get("adev_over_model"),
                 }
-            if entry["band"] == "high":
+            if entry["band"] == "low" and in_time:
+                entry["advice"] = (
+                    "the departure the level or variance scan located in time shows here "
+                    "too: see its entry"
+                )
+            elif entry["band"] == "high":
                 entry["advice"] = (
                     "toward Nyquist the sensor's output filter, its rounding and aliasing "
                     "from a faster internal rate shape the spectrum, and no shape of the "
@@ -133,6 +140,17 @@ def _mismatch(check: dict, rate_hz: float, duration_s: float, unit: str) -> dict
                     "sawtooth or a controller's cycle, time-stamp jitter, a process the "
                     "catalogue lacks)"
                 )
+        case "tails":
+            entry |= {"shape": "tails", "location": where}
+            entry["advice"] = (
+                "more samples lie far out than the model's Gaussian noise gives, and not as "
+                "the isolated glitches of the catalogue (runs of them, or too many): look at "
+                "the samples at the times given (handling, a loose connector, a digital "
+                "fault) and cut those stretches out"
+            )
+        case "residual_time" if in_time:
+            entry |= {"shape": name, "location": where}
+            entry["advice"] = "the level scan's entry locates it: see there"
         case _:
             entry |= {"shape": name, "location": where}
             entry["advice"] = (
@@ -161,6 +179,11 @@ def _located_band(checks: list[dict], failing: list[str], rate_hz: float) -> tup
             )
     if "spectral_line" in located:
         return "line", f"a line at {located['spectral_line']['frequency_hz']:.6g} Hz"
+    if set(located) == {"tails"}:
+        times = located["tails"].get("times_s", [])[:6]
+        return "samples", "samples far out" + (
+            f" at {', '.join(f'{t:.6g}' for t in times)} s" if times else ""
+        )
     high = (
         [
             f"{low:.3g}-{top:.3g} Hz"
@@ -189,8 +212,9 @@ def unexplained_of(result: SearchResult, still_failing: list[str]) -> dict:
     (:func:`_mismatch`), the findings withdrawn because they did not explain it, and the
     best candidate where none was decisive."""
     data = result.data
+    in_time = bool({"level_scan", "variance_scan"} & set(still_failing))
     mismatches = [
-        _mismatch(check, data.rate_hz, data.duration_s, data.unit)
+        _mismatch(check, data.rate_hz, data.duration_s, in_time)
         for check in result.final_checks
         if check["name"] in still_failing
     ]

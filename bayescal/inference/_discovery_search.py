@@ -64,6 +64,7 @@ from ..models.effects.saturation import Saturation, impute_clipped, saturation_s
 from ._checks import CHECK_LEVEL, run_checks
 from ._discovery_fit import Context, DiscoveryData, fit_model
 from ._priors import default_prior
+from ._scans import variance_scan
 from ._selection import select_noise_terms
 
 DECISIVE_LOG_BAYES_FACTOR = math.log(100.0)
@@ -159,23 +160,32 @@ def check_band(check: dict, rate_hz: float) -> str | None:
     return "low"
 
 
-def withdrawn_findings(findings, checks: list[dict], rate_hz: float) -> list:
+def withdrawn_findings(
+    findings, checks: list[dict], data, answers: Callable[[Finding], bool]
+) -> list:
     """The search's findings that are not named, because the model with them still fails a
-    check they should have answered: the check that locates them, or (for a term not tied to
-    a covariate) any check of their band; a stationary noise term also when the local power
-    departs over time (a variance that changes is not a stationary term's). A catalogue
-    entry that absorbs part of a mismatch it does not explain is the nearest wrong name."""
-    failing = [check for check in checks if not check["passed"]]
-    names = {check["name"] for check in failing}
-    bands = {check_band(check, rate_hz) for check in failing} - {None}
+    check they should have answered: the check that locates them (unless it now locates a
+    mismatch apart from the effect, :meth:`~bayescal.models.effects._base.Effect.apart`: a
+    line of another source beside a fitted sinusoid); a stationary noise term when the local
+    power departs over time (a variance that changes is not a stationary term's) or (for a
+    term not tied to a covariate) when any check of its band fails, unless the term alone
+    ``answers`` a check (without it, a check that passes would fail: it explains a mismatch
+    of its own, and what is left beside it is reported unexplained). A catalogue entry that
+    absorbs part of a mismatch it does not explain is the nearest wrong name."""
+    failing = {check["name"]: check for check in checks if not check["passed"]}
+    bands = {check_band(check, data.rate_hz) for check in failing.values()} - {None}
     withdrawn = []
     for finding in findings:
         effect = finding.effect
-        own = effect.located_by in names
+        own = failing.get(effect.located_by)
         covariate = effect.located_by.startswith("residual_vs_")
         in_band = effect.band in bands and not covariate
         stationary = isinstance(effect, SlotTerm) and "noise" in bands
-        if own or in_band or stationary:
+        if own is not None:
+            unexplained = not effect.apart(own, data.duration_s)
+        else:
+            unexplained = (in_band or stationary) and not answers(finding)
+        if unexplained:
             withdrawn.append(finding)
     return withdrawn
 
@@ -207,7 +217,7 @@ def search_effects(
     context = Context.of(data, unclipped, unclipped)
     baseline_fit = fit_model(context, ModelSpec.from_names(baseline))
     baseline_checks = run_checks(baseline_fit, data)
-    burst = _burst(baseline_checks, data)
+    burst = _burst(baseline_checks, data, unclipped, baseline)
     descaled = burst[0].descaled(unclipped, data.rate_hz) if burst else unclipped
     # A noise level that changes and stays (no burst) makes the samples' distribution a
     # mixture of two spreads, which the glitch scan would take for glitches: it is left to
@@ -224,7 +234,18 @@ def search_effects(
     checks = baseline_checks if not findings else run_checks(current, data)
     before_search = current
     current, checks, searched, undecided = _search(context, current, checks, max_effects, report)
-    withdrawn = withdrawn_findings(searched, checks, data.rate_hz)
+    passing = {check["name"] for check in checks if check["passed"]}
+
+    def answers(finding: Finding) -> bool:
+        """Whether the final model without ``finding`` fails a check that passes with it."""
+        spec = before_search.spec
+        for other in searched:
+            if other is not finding:
+                spec = spec.with_effect(other.effect)
+        without = run_checks(fit_model(context, spec), data)
+        return any(not check["passed"] for check in without if check["name"] in passing)
+
+    withdrawn = withdrawn_findings(searched, checks, data, answers)
     if withdrawn:
         report(f"withdrawing {', '.join(f.name for f in withdrawn)}: checks still fail there")
         searched = [finding for finding in searched if finding not in withdrawn]
@@ -268,17 +289,26 @@ def _failed(checks: list[dict], name: str) -> bool:
     return any(check["name"] == name and not check["passed"] for check in checks)
 
 
-def _burst(checks: list[dict], data) -> tuple | None:
+def _burst(checks: list[dict], data, values: np.ndarray, baseline) -> tuple | None:
     """A noise burst the baseline's variance scan located, with its scan as a decision
     (:func:`_decisive`): log Bayes factor the likelihood ratio less the Schwarz cost of the
     ratio and the log of the stretches tried; ELPD gain the ratio less its AIC cost (start,
     duration, ratio). Decided before the glitch scan, which would take a burst's samples for
-    glitches. None where there is none, or it is not decisive."""
+    glitches. None where there is none, it is not decisive, or the ``baseline`` refitted to
+    ``values`` with the burst scaled down still fails the variance scan (the burst does not
+    explain the change in local power)."""
     (scan,) = [check for check in checks if check["name"] == "variance_scan"]
     if scan["passed"] or "places" not in scan:
         return None
     effect = NoiseBurst.from_scan(scan, data.duration_s)
     if effect is None:
+        return None
+    # A burst that leaves the local power still departing (a noise level that steps and
+    # stays, or a change in one band beside it) is not the record's burst: not named.
+    descaled = effect.descaled(values, data.rate_hz)
+    context = Context.of(data, values, descaled)
+    fit = fit_model(context, ModelSpec.from_names(baseline))
+    if variance_scan(fit, data.rate_hz, data.unit)["p_value"] < CHECK_LEVEL:
         return None
     ratio = scan["log_likelihood_ratio"]
     n_frequencies = np.count_nonzero(np.isfinite(data.values)) // 2

@@ -128,6 +128,13 @@ class Effect(eqx.Module):
         location["check"] = self.located_by
         return location
 
+    def apart(self, check: dict, duration_s: float) -> bool:
+        """Whether ``check`` — this effect's own check, still failing with the effect in the
+        model — locates a mismatch apart from this effect (so the effect explained its own
+        and is kept, the rest reported unexplained). Default: no, the effect did not explain
+        what located it."""
+        return False
+
 
 class SlotTerm(Effect):
     """A term with one parameter among the noise model's (abstract): a stochastic term, or

@@ -9,6 +9,9 @@ from ._base import RegressionTerm
 
 MAX_COUNT = 2
 """The most sinusoids discovery adds to one model."""
+SAME_LINE_BINS = 5.0
+"""A line within this many Fourier resolutions of a fitted one (or of its harmonic) is
+taken for it."""
 
 
 class Sinusoid(RegressionTerm):
@@ -71,6 +74,16 @@ class Sinusoid(RegressionTerm):
 
     def location(self, finding, checks: dict) -> dict:
         return {"check": self.located_by, "frequency_hz": self.frequency_hz}
+
+    def apart(self, check: dict, duration_s: float) -> bool:
+        """The line still found lies more than :data:`SAME_LINE_BINS` Fourier resolutions
+        (1 / duration) from this one and from each of its harmonics: another source's line,
+        so this sinusoid explained its own. A line left at this frequency (one that wanders
+        or is broad) or at a harmonic (a periodic signal that is not a sine: a sawtooth, a
+        controller's cycle) is not a sinusoid's."""
+        frequency = check["location"]["frequency_hz"]
+        harmonic = max(round(frequency / self.frequency_hz), 1)
+        return abs(frequency - harmonic * self.frequency_hz) > SAME_LINE_BINS / duration_s
 
     def simulate(self, time_s: np.ndarray, amplitude: float, phase: float) -> np.ndarray:
         return amplitude * np.sin(2 * np.pi * self.frequency_hz * time_s + phase)

@@ -131,8 +131,14 @@ class Discovery:
     @property
     def summary(self) -> dict:
         """effect name -> its parameters, each ``{mean, sd, q05, q95, unit}`` (the 90 %
-        interval; empty without a final posterior); empty when nothing was found."""
-        return {effect.name: effect.parameters for effect in self.effects}
+        interval; empty without a final posterior); empty when nothing was found. A second
+        effect of one name (a second sinusoid) is ``name_2``."""
+        summary, seen = {}, {}
+        for effect in self.effects:
+            seen[effect.name] = seen.get(effect.name, 0) + 1
+            key = effect.name if seen[effect.name] == 1 else f"{effect.name}_{seen[effect.name]}"
+            summary[key] = effect.parameters
+        return summary
 
     @property
     def failures(self) -> list[str]:
@@ -233,14 +239,14 @@ def _evidence(finding: Finding, result: SearchResult, failed_before, after) -> t
 
 
 def _merged(effects: list[FoundEffect]) -> list[FoundEffect]:
-    """One entry per catalogue name: the grid and the white angle noise Q beyond it are both
-    ``quantization``, reported apart within one entry (the grid's LSB and rounding, then Q
-    with the evidence the spectrum gave it)."""
+    """One entry per finding, but one for ``quantization``: the grid and the white angle
+    noise Q beyond it are both ``quantization``, reported apart within one entry (the grid's
+    LSB and rounding, then Q with the evidence the spectrum gave it)."""
     merged: dict[str, FoundEffect] = {}
-    for effect in effects:
-        first = merged.get(effect.name)
-        if first is None:
-            merged[effect.name] = effect
+    for number, effect in enumerate(effects):
+        first = merged.get(effect.name) if effect.name == "quantization" else None
+        if first is None:  # every other effect is its own entry (two sinusoids: two lines)
+            merged[effect.name if effect.name == "quantization" else str(number)] = effect
             continue
         evidence = dict(first.evidence)
         evidence["white_angle_noise"] = {

@@ -307,7 +307,7 @@ def _burst(checks: list[dict], data, values: np.ndarray, baseline) -> tuple | No
     # stays, or a change in one band beside it) is not the record's burst: not named.
     descaled = effect.descaled(values, data.rate_hz)
     context = Context.of(data, values, descaled)
-    fit = fit_model(context, ModelSpec.from_names(baseline))
+    fit = fit_model(context, ModelSpec.from_names(baseline).with_effect(effect))
     if variance_scan(fit, data.rate_hz, data.unit)["p_value"] < CHECK_LEVEL:
         return None
     ratio = scan["log_likelihood_ratio"]

@@ -21,7 +21,6 @@ from ..inference._discovery_fit import DiscoveryData
 from ..inference._discovery_posterior import FinalPosterior, sample_final
 from ..inference._discovery_search import (
     DECISIVE_LOG_BAYES_FACTOR,
-    HIGH_FREQUENCY_FRACTION,
     UNMODELLED_CHECKS,
     Finding,
     SearchResult,
@@ -35,6 +34,7 @@ from ..models.effects.quantization import Quantization
 from ..models.effects.saturation import Saturation
 from ..recording._inputs import channel_input, check_same_length, samples
 from ..recording._recording import Channel
+from ._discovery_unexplained import unexplained_of
 
 AMBIGUOUS_LOG_BAYES_FACTOR = math.log(10.0)
 """A runner-up closer than this to the accepted term explains the mismatch about as well:
@@ -131,18 +131,42 @@ class Discovery:
     @property
     def summary(self) -> dict:
         """effect name -> its parameters, each ``{mean, sd, q05, q95, unit}`` (the 90 %
-        interval; empty without a final posterior); empty when nothing was found."""
-        return {effect.name: effect.parameters for effect in self.effects}
+        interval; empty without a final posterior); empty when nothing was found. A second
+        effect of one name (a second sinusoid) is ``name_2``."""
+        summary, seen = {}, {}
+        for effect in self.effects:
+            seen[effect.name] = seen.get(effect.name, 0) + 1
+            key = effect.name if seen[effect.name] == 1 else f"{effect.name}_{seen[effect.name]}"
+            summary[key] = effect.parameters
+        return summary
+
+    @property
+    def failures(self) -> list[str]:
+        """What makes this result fail its checks, in words: the final posterior's sampler
+        checks, and each named effect whose log Bayes factor and ELPD gain disagree (decisive
+        evidence for it, yet worse predictions with it)."""
+        failures = []
+        if self.posterior is not None and not self.posterior.diagnostics.passed:
+            failures += [f"the final posterior: {f}" for f in self.posterior.diagnostics.failures]
+        for effect in self.effects:
+            if effect.evidence.get("consistent") is False:
+                failures.append(
+                    f"{effect.name}: log Bayes factor {effect.evidence['log_bayes_factor']:.1f} "
+                    f"is decisive but its ELPD gain is {effect.delta_elpd:.1f} nats: the "
+                    "evidence disagrees with itself, so the effect is not established"
+                )
+        return failures
 
     @property
     def passed(self) -> bool:
         """Whether the final posterior passed its sampler checks (True when nothing was
-        found, so nothing was sampled)."""
-        return self.posterior is None or bool(self.posterior.diagnostics.passed)
+        found, so nothing was sampled) and every named effect's evidence agrees with its
+        predictive accuracy (:attr:`failures`)."""
+        return not self.failures
 
     def check(self) -> "Discovery":
         """Raise :class:`~bayescal.HealthCheckError` when the final posterior failed its
-        checks.
+        checks or an effect's evidence disagrees with itself.
 
         Returns
         -------
@@ -156,10 +180,7 @@ class Discovery:
             A check failed; the message names each.
         """
         if not self.passed:
-            raise HealthCheckError(
-                f"discovery on {self.channel}: the final posterior failed its checks: "
-                + "; ".join(self.posterior.diagnostics.failures)
-            )
+            raise HealthCheckError(f"discovery on {self.channel}: " + "; ".join(self.failures))
         return self
 
 
@@ -173,6 +194,11 @@ def _evidence(finding: Finding, result: SearchResult, failed_before, after) -> t
             name for name in failed_before if after.get(name, {}).get("passed")
         ],
     }
+    # The Schwarz score and the AIC-penalised ELPD share the fits' log-likelihood, so they
+    # can only disagree where the evidence came from elsewhere (an output filter's Laplace
+    # evidence, a scan's): decisive evidence with worse predictions is no evidence.
+    decisive = (finding.log_bayes_factor or 0) > DECISIVE_LOG_BAYES_FACTOR
+    evidence["consistent"] = not (decisive and finding.delta_elpd < 0)
     explanation = effect.explanation
     if finding.runner_up:
         runner, runner_score = finding.runner_up
@@ -212,59 +238,15 @@ def _evidence(finding: Finding, result: SearchResult, failed_before, after) -> t
     return evidence, explanation
 
 
-_ADVICE = {
-    "high": "the mismatch lies toward Nyquist, where the sensor's output filter, its rounding "
-    "and aliasing from a faster internal rate shape the spectrum, and no shape of the "
-    "catalogue explains it decisively — check the part's configured bandwidth and output "
-    "rate; a record with the filter bypassed or at the internal rate tells the shapes apart "
-    "(a longer record does not)",
-    "line": "a line that no single sinusoid explains decisively (one that wanders in "
-    "frequency or several close lines) — a longer record resolves close lines; a vibration "
-    "source nearby shows in every axis",
-    "low": "the recording holds too little evidence to name it — record longer, or with more "
-    "of what the term needs (a wider temperature swing, a start from power-on)",
-}
-"""What to do about a mismatch no term explains, by the band it was located in."""
-
-
-def _located_band(checks: list[dict], failing: list[str], rate_hz: float) -> tuple[str, str]:
-    """The band the failing checks located the mismatch in, and where, in words: a spectral
-    line; high frequency (spectrum bands or Allan deviation only near Nyquist); else low."""
-    located = {check["name"]: check["location"] for check in checks if check["name"] in failing}
-    if "spectral_line" in located:
-        return "line", f"a line at {located['spectral_line']['frequency_hz']:.6g} Hz"
-    high = (
-        [
-            f"{low:.3g}-{top:.3g} Hz"
-            for low, top in [located["spectrum_bands"]["frequency_hz"]]
-            if low >= HIGH_FREQUENCY_FRACTION * rate_hz
-        ]
-        if "spectrum_bands" in located
-        else []
-    )
-    allan = located.get("allan_deviation", {})
-    longest = max(allan.get("tau_range_s", [allan.get("tau_s", 0.0)]))
-    slow = set(located) - {"spectrum_bands", "allan_deviation"}
-    if high and not slow and longest <= 1.0 / (HIGH_FREQUENCY_FRACTION * rate_hz):
-        return "high", f"located at {high[0]}"
-    where = []
-    if "spectrum_bands" in located:
-        low, top = located["spectrum_bands"]["frequency_hz"]
-        where.append(f"spectrum {low:.3g}-{top:.3g} Hz")
-    if allan:
-        where.append(f"Allan deviation at tau = {allan['tau_s']:.3g} s")
-    return "low", ", ".join(where) or "in the slow residual"
-
-
 def _merged(effects: list[FoundEffect]) -> list[FoundEffect]:
-    """One entry per catalogue name: the grid and the white angle noise Q beyond it are both
-    ``quantization``, reported apart within one entry (the grid's LSB and rounding, then Q
-    with the evidence the spectrum gave it)."""
+    """One entry per finding, but one for ``quantization``: the grid and the white angle
+    noise Q beyond it are both ``quantization``, reported apart within one entry (the grid's
+    LSB and rounding, then Q with the evidence the spectrum gave it)."""
     merged: dict[str, FoundEffect] = {}
-    for effect in effects:
-        first = merged.get(effect.name)
-        if first is None:
-            merged[effect.name] = effect
+    for number, effect in enumerate(effects):
+        first = merged.get(effect.name) if effect.name == "quantization" else None
+        if first is None:  # every other effect is its own entry (two sinusoids: two lines)
+            merged[effect.name if effect.name == "quantization" else str(number)] = effect
             continue
         evidence = dict(first.evidence)
         evidence["white_angle_noise"] = {
@@ -322,21 +304,7 @@ def describe(result: SearchResult, posterior: FinalPosterior | None) -> Discover
         for check in result.final_checks
         if not check["passed"] and check["name"] not in UNMODELLED_CHECKS
     ]
-    unexplained = None
-    if still_failing and result.undecided:
-        name, score = result.undecided
-        band, where = _located_band(result.final_checks, still_failing, result.data.rate_hz)
-        unexplained = {
-            "checks": still_failing,
-            "band": band,
-            "where": where,
-            "best_candidate": name,
-            "log_bayes_factor": score,
-            "decisive_above": DECISIVE_LOG_BAYES_FACTOR,
-            "explanation": f"a mismatch remains ({', '.join(still_failing)}; {where}); the "
-            f"term that would explain it best, {name}, is not decisive (log Bayes factor "
-            f"{score:.1f}): {_ADVICE[band]}",
-        }
+    unexplained = unexplained_of(result, still_failing) if still_failing else None
     data = result.data
     # The grid's rounding and the output filter are in every model without being its terms.
     spec_terms = result.final.spec.terms()

@@ -139,5 +139,4 @@ def run(args) -> int:
     if args.json:
         write_json(args.json, document)
     print(discovery_text(found))
-    failures = [] if found.passed else list(found.posterior.diagnostics.failures)
-    return health_exit("discover", [f"the final posterior: {f}" for f in failures])
+    return health_exit("discover", found.failures)

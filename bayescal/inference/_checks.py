@@ -5,7 +5,9 @@ Each check gives a statistic, a p-value (Bonferroni-corrected over the places it
 where it looked: the Allan deviation of the residual against the model's band (the model's
 own EDF for the noise type it says dominates at each tau), the spectrum in octave bands and
 its largest line, the residual block means over time and against each covariate
-(temperature, accelerometers), tails, a rail, discrete levels, the time stamps. A check fails
+(temperature, accelerometers), the scans that locate a departure in time (steps, stretches,
+late drifts of the level; bursts and steps of the noise level: :mod:`._scans`), tails, a
+rail, discrete levels, the time stamps. A check fails
 when its p-value is below ``CHECK_LEVEL``.
 """
 
@@ -30,6 +32,7 @@ from ..models._whittle import tukey_window
 from ..models.effects.outliers import robust_scores
 from ..recording._levels import discrete_step, rail_check
 from ..recording._series import blocks, finite_moments
+from ._scans import level_scan, variance_scan
 
 CHECK_LEVEL = 0.01
 """A check fails when its (Bonferroni-corrected) p-value is below this."""
@@ -349,6 +352,8 @@ def run_checks(fit: ModelFit, data) -> list[dict]:
         _spectrum_check(fit),
         _line_check(fit, rate),
         _time_check(fit, rate, unit),
+        level_scan(fit, rate, unit),
+        variance_scan(fit, rate, unit),
     ]
     if data.temperature is not None:
         checks.append(

@@ -40,10 +40,13 @@ from ..models._composite import (
 )
 from ..models._whittle import spectral_summary, whittle_log_likelihood
 from ..models.effects._base import GRID_POINTS, PARABOLIC_STEPS
+from ..models.effects.bias_step import PROFILE_DROP as STEP_PROFILE_DROP
+from ..models.effects.bias_step import step_profile
 from ..recording._levels import discrete_step
-from ._checks import line_search
+from ._checks import CHECK_LEVEL, line_search
 from ._mcmc import summarize
 from ._optimize import maximum_a_posteriori
+from ._scans import level_scan
 
 MIN_SAMPLES = 256
 """Samples discovery needs: below this its checks have too few blocks and bins to say
@@ -144,6 +147,33 @@ class Context:
 
     def line_frequency(self, fit: ModelFit) -> float:
         return line_search(fit, self.data.rate_hz)[1]
+
+    def level_event(self, fit: ModelFit, kind: str):
+        """The strongest departure of ``kind`` (a step) the level scan of ``fit`` locates
+        beyond its threshold: its time refined to a sample (the CUSUM profile over the two
+        blocks either side of it) and the record of the search (the scan's z, the profile's
+        90 % interval); None when the scan passes or locates none of that kind."""
+        data = self.data
+        scan = level_scan(fit, data.rate_hz, data.unit)
+        if scan["p_value"] >= CHECK_LEVEL:
+            return None
+        events = [event for event in scan["location"]["events"] if event["kind"] == kind]
+        if not events:
+            return None
+        block = scan["location"]["block_s"] * data.rate_hz
+        centre = round(events[0]["time_s"] * data.rate_hz)
+        first = max(centre - int(2 * block), 0)
+        last = min(centre + int(2 * block), fit.residual.size)
+        segment = fit.residual[first:last]
+        sd = float(np.nanstd(np.diff(segment)) / math.sqrt(2))
+        profile = step_profile(fit.residual, first, last, sd)
+        best = int(np.argmax(profile))
+        inside = np.flatnonzero(profile >= profile[best] - STEP_PROFILE_DROP)
+        to_time = lambda k: float((first + 1 + k) / data.rate_hz)  # noqa: E731
+        return to_time(best), {
+            "scan_z": events[0]["z"],
+            "time_interval_s": [to_time(inside.min()), to_time(inside.max())],
+        }
 
     @staticmethod
     def summarize(draws, unit: str) -> dict:

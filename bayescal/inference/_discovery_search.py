@@ -54,8 +54,9 @@ from ..models._terms import (
     PARAMETERS_OF_TERM,
     parameter_unit,
 )
-from ..models.effects._base import Effect
+from ..models.effects._base import Effect, SlotTerm
 from ..models.effects._catalogue import SEARCHED
+from ..models.effects.noise_burst import NoiseBurst
 from ..models.effects.outliers import Outliers, outlier_scan, without_outliers
 from ..models.effects.output_filter import OutputFilter
 from ..models.effects.quantization import Quantization
@@ -63,6 +64,7 @@ from ..models.effects.saturation import Saturation, impute_clipped, saturation_s
 from ._checks import CHECK_LEVEL, run_checks
 from ._discovery_fit import Context, DiscoveryData, fit_model
 from ._priors import default_prior
+from ._scans import variance_scan
 from ._selection import select_noise_terms
 
 DECISIVE_LOG_BAYES_FACTOR = math.log(100.0)
@@ -131,6 +133,61 @@ class SearchResult(eqx.Module):
     """(name, log Bayes factor) of the best candidate when the search stopped with a check
     still failing because no term was decisive; empty otherwise."""
     saturation: dict | None = None
+    withdrawn: tuple = ()
+    """Findings the search accepted and then withdrew: a check of their band still failed
+    with them in the model (:func:`withdrawn_findings`)."""
+
+
+def check_band(check: dict, rate_hz: float) -> str | None:
+    """The band a failing check locates its mismatch in, in the catalogue's words (an
+    effect's :attr:`~bayescal.models.effects._base.Effect.band`): "line", "high" (the
+    spectrum or the Allan deviation only toward Nyquist), "noise" (the local power over
+    time), "samples" (tails, a grid), else "low"; None for a check no term answers."""
+    name, location = check["name"], check["location"]
+    if name in UNMODELLED_CHECKS:
+        return None
+    if name == "spectral_line":
+        return "line"
+    if name == "spectrum_bands":
+        return "high" if location["frequency_hz"][0] >= HIGH_FREQUENCY_FRACTION * rate_hz else "low"
+    if name == "allan_deviation":
+        longest = max(location.get("tau_range_s", [location.get("tau_s", math.inf)]))
+        return "high" if longest <= 1.0 / (HIGH_FREQUENCY_FRACTION * rate_hz) else "low"
+    if name == "variance_scan":
+        return "noise"
+    if name in ("tails", "discrete_levels"):
+        return "samples"
+    return "low"
+
+
+def withdrawn_findings(
+    findings, checks: list[dict], data, answers: Callable[[Finding], bool]
+) -> list:
+    """The search's findings that are not named, because the model with them still fails a
+    check they should have answered: the check that locates them (unless it now locates a
+    mismatch apart from the effect, :meth:`~bayescal.models.effects._base.Effect.apart`: a
+    line of another source beside a fitted sinusoid); a stationary noise term when the local
+    power departs over time (a variance that changes is not a stationary term's) or (for a
+    term not tied to a covariate) when any check of its band fails, unless the term alone
+    ``answers`` a check (without it, a check that passes would fail: it explains a mismatch
+    of its own, and what is left beside it is reported unexplained). A catalogue entry that
+    absorbs part of a mismatch it does not explain is the nearest wrong name."""
+    failing = {check["name"]: check for check in checks if not check["passed"]}
+    bands = {check_band(check, data.rate_hz) for check in failing.values()} - {None}
+    withdrawn = []
+    for finding in findings:
+        effect = finding.effect
+        own = failing.get(effect.located_by)
+        covariate = effect.located_by.startswith("residual_vs_")
+        in_band = effect.band in bands and not covariate
+        stationary = isinstance(effect, SlotTerm) and "noise" in bands
+        if own is not None:
+            unexplained = not effect.apart(own, data.duration_s)
+        else:
+            unexplained = (in_band or stationary) and not answers(finding)
+        if unexplained:
+            withdrawn.append(finding)
+    return withdrawn
 
 
 def search_effects(
@@ -155,16 +212,48 @@ def search_effects(
         )
     if "white" not in baseline:
         baseline = ("white", *baseline)
-    saturation, unclipped, outliers, clean = _sample_effects(data.values, seed)
-    context = Context.of(data, unclipped, clean)
+    saturation, unclipped = _saturation(data.values, seed)
     report("fitting the baseline")
+    context = Context.of(data, unclipped, unclipped)
     baseline_fit = fit_model(context, ModelSpec.from_names(baseline))
     baseline_checks = run_checks(baseline_fit, data)
+    burst = _burst(baseline_checks, data, unclipped, baseline)
+    descaled = burst[0].descaled(unclipped, data.rate_hz) if burst else unclipped
+    # A noise level that changes and stays (no burst) makes the samples' distribution a
+    # mixture of two spreads, which the glitch scan would take for glitches: it is left to
+    # the variance scan, which reports it unexplained.
+    changing = not burst and _failed(baseline_checks, "variance_scan")
+    outliers = None if changing else _decisive(outlier_scan(descaled))
+    clean = without_outliers(descaled, outliers["flagged"]) if outliers else descaled
+    if burst or outliers:
+        context = Context.of(data, unclipped, clean)
+        baseline_fit = fit_model(context, ModelSpec.from_names(baseline))
     context, current, findings = _decided_before_search(
-        context, baseline_fit, baseline, baseline_checks, saturation, outliers
+        context, baseline_fit, baseline, baseline_checks, saturation, outliers, burst
     )
     checks = baseline_checks if not findings else run_checks(current, data)
+    before_search = current
     current, checks, searched, undecided = _search(context, current, checks, max_effects, report)
+    passing = {check["name"] for check in checks if check["passed"]}
+
+    def answers(finding: Finding) -> bool:
+        """Whether the final model without ``finding`` fails a check that passes with it."""
+        spec = before_search.spec
+        for other in searched:
+            if other is not finding:
+                spec = spec.with_effect(other.effect)
+        without = run_checks(fit_model(context, spec), data)
+        return any(not check["passed"] for check in without if check["name"] in passing)
+
+    withdrawn = withdrawn_findings(searched, checks, data, answers)
+    if withdrawn:
+        report(f"withdrawing {', '.join(f.name for f in withdrawn)}: checks still fail there")
+        searched = [finding for finding in searched if finding not in withdrawn]
+        spec = before_search.spec
+        for finding in searched:
+            spec = spec.with_effect(finding.effect)
+        current = fit_model(context, spec)
+        checks = run_checks(current, data)
     report("checking the final model")
     return SearchResult(
         context=context,
@@ -177,6 +266,7 @@ def search_effects(
         outliers=outliers,
         undecided=undecided,
         saturation=saturation,
+        withdrawn=tuple(withdrawn),
     )
 
 
@@ -185,27 +275,72 @@ def _decisive(scan: dict | None) -> dict | None:
     return scan if scan and scan["log_bayes_factor"] > DECISIVE_LOG_BAYES_FACTOR else None
 
 
-def _sample_effects(values: np.ndarray, seed: int):
-    """The sample-level scans: (saturation, the samples with the clipped ones imputed,
-    outliers, those with the outliers replaced); a scan is None where it is not decisive."""
+def _saturation(values: np.ndarray, seed: int):
+    """The saturation scan (None where it is not decisive) and the samples with the clipped
+    ones imputed."""
     saturation = _decisive(saturation_scan(values))
     unclipped = (
         impute_clipped(values, saturation, np.random.default_rng(seed)) if saturation else values
     )
-    outliers = _decisive(outlier_scan(unclipped))
-    clean = without_outliers(unclipped, outliers["flagged"]) if outliers else unclipped
-    return saturation, unclipped, outliers, clean
+    return saturation, unclipped
+
+
+def _failed(checks: list[dict], name: str) -> bool:
+    return any(check["name"] == name and not check["passed"] for check in checks)
+
+
+def _burst(checks: list[dict], data, values: np.ndarray, baseline) -> tuple | None:
+    """A noise burst the baseline's variance scan located, with its scan as a decision
+    (:func:`_decisive`): log Bayes factor the likelihood ratio less the Schwarz cost of the
+    ratio and the log of the stretches tried; ELPD gain the ratio less its AIC cost (start,
+    duration, ratio). Decided before the glitch scan, which would take a burst's samples for
+    glitches. None where there is none, it is not decisive, or the ``baseline`` refitted to
+    ``values`` with the burst scaled down still fails the variance scan (the burst does not
+    explain the change in local power)."""
+    (scan,) = [check for check in checks if check["name"] == "variance_scan"]
+    if scan["passed"] or "places" not in scan:
+        return None
+    effect = NoiseBurst.from_scan(scan, data.duration_s)
+    if effect is None:
+        return None
+    # A burst that leaves the local power still departing (a noise level that steps and
+    # stays, or a change in one band beside it) is not the record's burst: not named.
+    descaled = effect.descaled(values, data.rate_hz)
+    context = Context.of(data, values, descaled)
+    fit = fit_model(context, ModelSpec.from_names(baseline).with_effect(effect))
+    if variance_scan(fit, data.rate_hz, data.unit)["p_value"] < CHECK_LEVEL:
+        return None
+    ratio = scan["log_likelihood_ratio"]
+    n_frequencies = np.count_nonzero(np.isfinite(data.values)) // 2
+    decision = _decisive(
+        {
+            "log_bayes_factor": ratio - 0.5 * math.log(n_frequencies) - math.log(scan["places"]),
+            "delta_elpd": ratio - 3.0,
+            "delta_elpd_se": math.sqrt(2 * ratio),
+            "shape_in": scan["shapes"][0],
+            "shape_out": scan["shapes"][1],
+            "block_s": scan["location"]["block_s"],
+            "band_hz": scan["location"]["band_hz"],
+        }
+    )
+    return (effect, decision) if decision else None
 
 
 def _decided_before_search(
-    context: Context, current: ModelFit, baseline, baseline_checks, saturation, outliers
+    context: Context, current: ModelFit, baseline, baseline_checks, saturation, outliers, burst
 ) -> tuple[Context, ModelFit, list]:
-    """The effects named before the search: clipping and glitches (from their scans), the
+    """The effects named before the search: clipping, a noise burst and glitches (from their
+    scans), the
     grid the samples sit on, and the output filter when the baseline misses power near
     Nyquist. Returns the context (with the filter, if one was decided), the model with them
     and their findings."""
     findings = []
-    for effect, scan in ((Saturation(), saturation), (Outliers(), outliers)):
+    burst_effect, burst_scan = burst or (None, None)
+    for effect, scan in (
+        (Saturation(), saturation),
+        (burst_effect, burst_scan),
+        (Outliers(), outliers),
+    ):
         if scan:
             current = fit_model(context, current.spec.with_effect(effect))
             findings.append(
@@ -216,7 +351,7 @@ def _decided_before_search(
                     scan["delta_elpd"],
                     scan["delta_elpd_se"],
                     (),
-                    {},
+                    scan if effect is burst_effect else {},
                 )
             )
     if context.lsb > 0:

@@ -36,6 +36,7 @@ from .effects._catalogue import CATALOGUE, SEARCHED
 from .effects._parameter import Context
 from .effects.bias_instability import BiasInstability
 from .effects.gauss_markov import GaussMarkov
+from .effects.noise_burst import NoiseBurst
 from .effects.outliers import Outliers
 from .effects.output_filter import OutputFilter
 from .effects.quantization import Quantization
@@ -123,7 +124,9 @@ class ModelSpec(eqx.Module):
 
     @property
     def outliers(self) -> bool:
-        return any(isinstance(effect, Outliers) for effect in self.effects)
+        """Whether the model is fitted to the cleaned samples: glitches replaced, a noise
+        burst scaled down."""
+        return any(isinstance(effect, (Outliers, NoiseBurst)) for effect in self.effects)
 
     def ranked(self) -> list[Effect]:
         """The effects beyond the noise terms, by rank (each kind in the order added)."""

@@ -56,6 +56,10 @@ class Search(Protocol):
     def line_frequency(self, fit) -> float:
         """The frequency of the strongest spectral line the fit leaves in its residual."""
 
+    def level_event(self, fit, kind: str):
+        """The time of the strongest departure of ``kind`` (``"step"``) the level scan of
+        the fit locates, and the search's record; None where it locates none."""
+
     def summarize(self, draws, unit: str) -> dict:
         """Mean, sd, 5 % and 95 % quantiles of posterior draws, with the unit."""
 
@@ -123,6 +127,13 @@ class Effect(eqx.Module):
         location = dict(checks[self.located_by]["location"]) if self.located_by in checks else {}
         location["check"] = self.located_by
         return location
+
+    def apart(self, check: dict, duration_s: float) -> bool:
+        """Whether ``check`` — this effect's own check, still failing with the effect in the
+        model — locates a mismatch apart from this effect (so the effect explained its own
+        and is kept, the rest reported unexplained). Default: no, the effect did not explain
+        what located it."""
+        return False
 
 
 class SlotTerm(Effect):

@@ -5,9 +5,11 @@ for an effect decided on the samples themselves, ``SAMPLE``).
 """
 
 from .bias_instability import BiasInstability
+from .bias_step import BiasStep
 from .earth_rotation import EarthRotation
 from .g_sensitivity import GSensitivity
 from .gauss_markov import GaussMarkov
+from .noise_burst import NoiseBurst
 from .outliers import Outliers
 from .output_filter import OutputFilter
 from .quantization import Quantization
@@ -29,10 +31,12 @@ SEARCHED = (
     WarmupTransient,
     Sinusoid,
     GSensitivity,
+    BiasStep,
 )
 """The effects discovery proposes in each round, in this order."""
-SAMPLE = (Saturation, Outliers)
-"""Effects decided first, on the samples' distribution, in this order."""
+SAMPLE = (Saturation, NoiseBurst, Outliers)
+"""Effects decided first, on the samples' distribution and the baseline's variance scan, in
+this order."""
 CATALOGUE = {
     effect.name: effect for effect in (White, OutputFilter, *SEARCHED, *SAMPLE, EarthRotation)
 }

@@ -9,6 +9,9 @@ from ._base import RegressionTerm
 
 MAX_COUNT = 2
 """The most sinusoids discovery adds to one model."""
+SAME_LINE_BINS = 5.0
+"""A line within this many Fourier resolutions of a fitted one (or of its harmonic) is
+taken for it."""
 
 
 class Sinusoid(RegressionTerm):
@@ -45,12 +48,16 @@ class Sinusoid(RegressionTerm):
         return [np.sin(phase), np.cos(phase)], [1.0, 1.0], [data.unit, data.unit]
 
     def derive(self, draws: dict, units: dict, index: int) -> None:
-        """The amplitude sqrt(a^2 + b^2) in place of the sine and cosine coefficients."""
+        """The amplitude A = sqrt(a^2 + b^2) and phase phi = atan2(b, a) (rad) in place of
+        the sine and cosine coefficients: a sin(2 pi f t) + b cos(2 pi f t) =
+        A sin(2 pi f t + phi), t from the record's first sample."""
         sine, cosine = (draws.pop(f"sinusoid{index}_{part}") for part in ("sin", "cos"))
         unit = units.pop(f"sinusoid{index}_sin")
         units.pop(f"sinusoid{index}_cos")
         draws[f"sinusoid{index}_amplitude"] = np.hypot(sine, cosine)
         units[f"sinusoid{index}_amplitude"] = unit
+        draws[f"sinusoid{index}_phase"] = np.arctan2(cosine, sine)
+        units[f"sinusoid{index}_phase"] = "rad"
 
     @classmethod
     def propose(cls, search, current):
@@ -64,13 +71,45 @@ class Sinusoid(RegressionTerm):
         amplitude = search.summarize(
             posterior.draws[f"sinusoid{index}_amplitude"], search.data.unit
         )
-        return {
-            "amplitude": amplitude,
-            "frequency": search.frequency_interval(finding.fit, index, amplitude["mean"]),
-        }
+        frequency = search.frequency_interval(finding.fit, index, amplitude["mean"])
+        # Lines closer than this are one line in the record's periodogram.
+        frequency["resolution_hz"] = 1.0 / search.data.duration_s
+        phase = _circular_summary(np.ravel(posterior.draws[f"sinusoid{index}_phase"]))
+        return {"frequency": frequency, "amplitude": amplitude, "phase": phase}
 
     def location(self, finding, checks: dict) -> dict:
         return {"check": self.located_by, "frequency_hz": self.frequency_hz}
 
+    def apart(self, check: dict, duration_s: float) -> bool:
+        """The line still found lies more than :data:`SAME_LINE_BINS` Fourier resolutions
+        (1 / duration) from this one and from each of its harmonics: another source's line,
+        so this sinusoid explained its own. A line left at this frequency (one that wanders
+        or is broad) or at a harmonic (a periodic signal that is not a sine: a sawtooth, a
+        controller's cycle) is not a sinusoid's."""
+        frequency = check["location"]["frequency_hz"]
+        harmonic = max(round(frequency / self.frequency_hz), 1)
+        return abs(frequency - harmonic * self.frequency_hz) > SAME_LINE_BINS / duration_s
+
     def simulate(self, time_s: np.ndarray, amplitude: float, phase: float) -> np.ndarray:
         return amplitude * np.sin(2 * np.pi * self.frequency_hz * time_s + phase)
+
+
+def _circular_summary(angles: np.ndarray) -> dict:
+    """Mean, sd and 90 % interval of an angle's draws (rad), taken about their circular
+    mean, in whichever of (-pi, pi] and [0, 2 pi) holds the interval without a wrap; the sd
+    is the circular one, sqrt(-2 log R)."""
+    resultant = np.mean(np.exp(1j * angles))
+    centre = float(np.angle(resultant))
+    about = centre + np.angle(np.exp(1j * (angles - centre)))  # within pi of the centre
+    low, high = (float(q) for q in np.quantile(about, [0.05, 0.95]))
+    wraps = low <= -math.pi or high > math.pi  # (-pi, pi] cuts the interval: [0, 2 pi)
+    shift = 2 * math.pi if wraps and centre < 0 else 0.0
+    return {
+        "mean": centre + shift,
+        "sd": float(math.sqrt(max(-2 * math.log(abs(resultant)), 0.0))),
+        "q05": low + shift,
+        "q95": high + shift,
+        "unit": "rad",
+        "range": "[0, 2 pi)" if wraps else "(-pi, pi]",
+        "definition": "A sin(2 pi f t + phase), t from the record's first sample",
+    }

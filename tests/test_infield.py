@@ -228,7 +228,9 @@ def _temperature_gap(table):
         (None, ("--align", "0:200"), "shorter than the 300 s"),
         (None, ("--align", "300:200"), "--align"),
         (None, ("--unit", "rad/s"), "is in deg/s but the channel is in rad/s"),
-        (None, ("--taxi", "600:700"), "not yet supported"),
+        (None, ("--taxi", "500:700"), "starts before the alignment window"),
+        (None, ("--taxi", "600:700"), "the recording ends at"),
+        (None, ("--track-heading", "90"), "without a taxi"),
         (None, ("--drift", "-1"), "--drift '-1'"),
         ("other_channels", (), "not of 'gyro_x'"),
     ],
@@ -275,8 +277,12 @@ def test_the_library_refuses_what_the_command_line_refuses(old):
         bc.infield_update(park.recording, old, latitude=-86.0, align=(0, 400))
     with pytest.raises(bc.InputError, match="shorter than"):
         bc.infield_update(park.recording, old, latitude=45.0, align=(100, 350))
-    with pytest.raises(bc.InputError, match="not yet supported"):
+    with pytest.raises(bc.InputError, match="without a taxi"):
         bc.infield_update(park.recording, old, latitude=45.0, align=(0, 400), track_heading=90)
+    with pytest.raises(bc.InputError, match="track_heading"):
+        bc.infield_update(
+            park.recording, old, latitude=45.0, align=(0, 300), taxi=(300, 400), track_heading="x"
+        )
     with pytest.raises(bc.InputError, match="not 'gyro_z'"):
         bc.infield_update(
             park.recording,

@@ -20,6 +20,7 @@ Estimation*, table 3.8-1). Below WANDER_SPEED it fades in with a smooth step of 
 """
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -85,3 +86,29 @@ def leg_steps(times, velocity, headings_deg) -> np.ndarray:
             if close[near].all():
                 found[k] = leg
     return found
+
+
+@dataclass(frozen=True)
+class TaxiReference:
+    """What the fine alignment is told about a taxi that follows the park: where it starts in
+    the record and the taxiway's known track headings."""
+
+    start_sample: int
+    """The taxi's first sample, counted from the window's start."""
+    headings_deg: tuple[float, ...]
+    """The known track heading of each straight leg, deg from north."""
+    wander_sd: float = WANDER_SD
+    wander_time_s: float = WANDER_TIME_S
+
+
+def cross_track_row(heading_deg: float, velocity) -> tuple[np.ndarray, np.ndarray]:
+    """The cross-track velocity's sensitivity to the velocity errors (north, east) and to the
+    tilts (north, east, down) at computed ``velocity`` (north, east, down, m/s), across a track
+    of ``heading_deg``: with the modified phi-angle model (:mod:`._error_model`) the computed
+    velocity is the true one plus delta v + v x phi, and n . (v x phi) = -(v . t) phi_D, t and n
+    the along- and cross-track unit vectors (so V psi, psi = -phi_D, as NAVIGATION.md says)."""
+    chi = math.radians(heading_deg)
+    across = np.array([-math.sin(chi), math.cos(chi)])
+    along = np.array([math.cos(chi), math.sin(chi)])
+    tilt = np.array([0.0, 0.0, -float(along @ np.asarray(velocity)[:2])])
+    return across, tilt

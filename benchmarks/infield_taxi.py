@@ -150,6 +150,7 @@ def main() -> None:
     parser.add_argument("--scenarios", type=int, default=100)
     parser.add_argument("--rate", type=float, default=100.0, help="the IMU's rate, Hz")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--every", type=int, default=10, help="report every this many")
     args = parser.parse_args()
     from bayescal.capabilities._examples import example_gyro_calibrations
 
@@ -158,10 +159,10 @@ def main() -> None:
     for index in range(args.scenarios):
         for name, row in one_scenario(args.seed + index, old, args.rate).items():
             results.setdefault(name, []).append(row)
-        if (index + 1) % 5 == 0:
+        if (index + 1) % args.every == 0 or index + 1 == args.scenarios:
             print(f"... {index + 1} scenarios", flush=True)
-    for name, rows in results.items():
-        report(name, rows)
+            for name, rows in results.items():
+                report(name, rows)
 
 
 if __name__ == "__main__":

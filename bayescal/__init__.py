@@ -52,6 +52,7 @@ _EXPORTS = {
     # navigation
     "simulate_park": "navigation._simulate",
     "ParkSimulation": "navigation._simulate",
+    "Taxi": "navigation._simulate",
     # inference
     "Sampler": "inference._sampler",
     "FitCheck": "inference._checks",

@@ -30,6 +30,7 @@ def _oracle(name: str):
     return pytest.importorskip(f"pyins.{name}")
 
 
+GYROS = ("gyro_x", "gyro_y", "gyro_z")
 PARK = {"lla": (45.0, 10.0, 0.0), "rph": (1.0, -2.0, 30.0)}
 GYRO_BIAS = np.array([1e-7, -2e-7, 3e-8])  # rad/s, about 0.02 deg/h
 ACCEL_BIAS = np.array([1e-4, -2e-4, 3e-4])  # m/s^2
@@ -345,3 +346,69 @@ def test_a_measurement_each_second_loses_nothing_against_ten(small_alignment):
     (mean_1, sd_1), (mean_10, sd_10) = results
     assert np.all(np.abs(mean_1 - mean_10) < 0.05 * sd_10)
     np.testing.assert_allclose(sd_1, sd_10, rtol=0.02)
+
+
+def test_the_taxi_readings_mechanize_back_into_the_taxi_and_the_wander_stays_bounded():
+    """The simulator's taxi (park, acceleration, two turns) is the exact inverse of the
+    mechanization: mechanizing its readings (their thermal and accelerometer biases taken off,
+    the noise a millionth of navigation grade) returns the true velocity, position and heading
+    to rounding; the wander's offset about the centre line has the sd it was given (within
+    50 %: a few time constants of one path); standing, the vehicle reads the Earth rate and
+    gravity; the GNSS columns scatter about the truth with their sd."""
+    import bayescal as bc
+
+    old = {
+        name: bc.ThermalCalibration.from_document(
+            {
+                "schema": "bayescal.thermal_calibration",
+                "schema_version": 1,
+                "channel": name,
+                "unit": "deg/s",
+                "temperature_unit": "degC",
+                "reference_temperature": 30.0,
+                "degree": 1,
+                "coefficients": [1e-5, 5e-7],
+                "covariance": [[5e-13, 0], [0, 5e-15]],
+                "temperature_range": [20.0, 40.0],
+                "noise": {"terms": ["white"]},
+                "provenance": [],
+            }
+        )
+        for name in ("gyro_x", "gyro_y", "gyro_z")
+    }
+    taxi = bc.Taxi(legs=((30.0, 120.0), (120.0, 90.0), (75.0, 90.0)), wander_sd=0.4, gnss_sd=2.0)
+    rate, park_s = 20.0, 30.0
+    quiet = {"N": 1e-12, "B": 0.0}
+    park = bc.simulate_park(
+        old,
+        duration_s=park_s,
+        rate_hz=rate,
+        taxi=taxi,
+        gyro_noise=quiet,
+        accel_noise=quiet,
+        seed=4,
+    )
+    columns, truth = park.recording.columns, park.truth
+    rates = np.stack(
+        [columns[g] - park.gyro_bias(g, columns["temperature"]) for g in GYROS], axis=1
+    )
+    forces = np.stack([columns[a] for a in ("acc_x", "acc_y", "acc_z")], axis=1)
+    forces = forces - truth["accel_bias"]
+    attitude = np.asarray(dcm_from_euler(*np.radians([0.5, -0.8, 30.0])))
+    computed = mechanize(
+        np.radians(rates), forces, rate, latitude=math.radians(45.0), attitude=attitude
+    )
+    trajectory = truth["trajectory"]
+    assert columns["gyro_x"].size == round((park_s + taxi.duration_s(30.0)) * rate)
+    assert np.abs(computed.velocity - trajectory["velocity"]).max() < 1e-6
+    north = np.degrees(computed.latitude) - trajectory["latitude"]
+    assert np.abs(north).max() * 111e3 < 1e-4
+    heading = np.degrees(np.asarray(euler_from_dcm(computed.attitude)[2]))
+    assert np.abs((heading - trajectory["heading"] + 180) % 360 - 180).max() < 1e-6
+    assert abs(np.hypot(*trajectory["velocity"][-1, :2]) - taxi.speed) < 0.2
+    moving = trajectory["time"] > park_s + 30
+    assert 0.5 * 0.4 < trajectory["wander"][moving].std() < 1.5 * 0.4
+    assert abs(np.linalg.norm(forces[0]) - truth["gravity"]) < 1e-6
+    assert abs(np.linalg.norm(np.radians(rates[0])) - EARTH_RATE) < 1e-10
+    error = (columns["gnss_latitude"] - trajectory["latitude"][:-1]) * 111e3
+    assert 1.0 < error.std() < 3.0

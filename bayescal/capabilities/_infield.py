@@ -34,9 +34,16 @@ from ..navigation._earth import check_latitude
 from ..navigation._error_model import TILT
 from ..navigation._frames import euler_from_dcm
 from ..navigation._simulate import ACCELEROMETERS, GYROS
+from ..navigation._taxi import TaxiReference
 from ..recording._recording import Recording, load_recording
 from ..recording._units import parse_unit
-from ._infield_inputs import alignment_window, gyro_priors, old_calibrations, read_alignment
+from ._infield_inputs import (
+    alignment_window,
+    gyro_priors,
+    old_calibrations,
+    read_alignment,
+    taxi_reference,
+)
 from ._infield_summary import (
     calibration_notes,
     calibrations,
@@ -44,16 +51,15 @@ from ._infield_summary import (
     informed_axes,
     innovation_check,
     points,
+    projection,
     projections,
     summary,
+    taxi_summary,
 )
 from ._thermal import save_thermal_calibrations as _save
 
 ACCEL_INSTABILITY = 1e-5
 """The accelerometers' bias instability assumed, m/s^2 (1 ug: navigation grade)."""
-TAXI_LATER = (
-    "the taxi's heading measurement (--taxi, --track-heading) is not yet supported (issue 36)"
-)
 
 
 @dataclass(frozen=True)
@@ -70,8 +76,10 @@ class InFieldUpdate:
         Channel -> its :class:`~bayescal.ThermalCalibration`: updated for the gyros the
         alignment informs, the old one (its provenance noting why) for the vertical gyro.
     heading_error : dict
-        The heading error at the alignment's end, computed minus true: ``mean``, ``sd``,
-        ``q05``, ``q95`` in degrees. At rest it is the east bias level in disguise.
+        The heading error at the window's end (the taxi's end when there is one), computed
+        minus true: ``mean``, ``sd``, ``q05``, ``q95`` in degrees, and its posterior
+        ``correlation_with_east_level``. At rest it is the east bias level in disguise
+        (correlation near -1); a taxi along a known track tells it, and the two separate.
     points : dict
         Channel -> the (temperature, gyro bias) pairs of the fine alignment's smoother, one
         per block: ``time_s``, ``temperature``, ``bias``, ``sd`` and the ``unit``.
@@ -93,6 +101,9 @@ class InFieldUpdate:
     alignment : dict
         The window, the place, the coarse attitude and the computed attitude at the end
         (deg), and the white-noise densities read from the record.
+    taxi : dict
+        The taxi, when one was given: its window, the track headings, how many filter steps lay
+        on each leg, and whether it told the heading (``informative``).
     notes : tuple of str
         What the run noticed (temperatures outside the calibrated range, ...).
     posterior : object
@@ -108,6 +119,7 @@ class InFieldUpdate:
     projections: dict
     drift: dict
     alignment: dict
+    taxi: dict | None = None
     notes: tuple[str, ...] = ()
     posterior: object = field(default=None, compare=False, repr=False)
 
@@ -182,6 +194,7 @@ class InFieldUpdate:
                 "classical": self.classical,
                 "checks": self.checks,
                 "alignment": self.alignment,
+                "taxi": self.taxi,
                 "notes": list(self.notes),
             }
         )
@@ -223,9 +236,15 @@ def infield_update(
         Geodetic latitude, degrees (within +-85).
     align : (float, float)
         The still alignment window, seconds from the first sample (at least 300 s).
-    taxi, track_heading : optional
-        The taxi and its known heading (not yet supported: the east level then stays at its
-        prior).
+    taxi : (float, float), optional
+        The taxi after the park, seconds from the first sample (starting at or after the
+        park's end): mechanized on from the alignment, its steps on a straight leg of known
+        heading measure the computed cross-track velocity, which tells the heading error and
+        so separates it from the east bias level (steps k-l of the claim).
+    track_heading : float or sequence of float or str, optional
+        The taxiway's known track heading, deg from north: one, or one per straight leg
+        (``"120,210"`` as a string too). Without it the taxi tells nothing about the heading
+        (a note says so) and the east level stays at its prior.
     seed : int
         Seed of the sampler: the same inputs and seed give the same result.
     drift : float or "auto"
@@ -259,7 +278,8 @@ def infield_update(
     ------
     InputError
         Motion in the alignment window (where), a missing temperature, a latitude out of
-        range, a window too short, a calibration of other channels or units, a taxi.
+        range, a window too short, a calibration of other channels or units, a taxi window
+        before the park's end or past the record, a track heading without a taxi.
 
     Examples
     --------
@@ -273,13 +293,9 @@ def infield_update(
     False
     >>> update.save("new.json")  # doctest: +SKIP
     """
-    if taxi is not None or track_heading is not None:
-        raise InputError(
-            TAXI_LATER,
-            fix="leave them out: the east bias level then stays at its prior, as the result says",
-        )
     latitude = check_latitude(latitude)
     window = alignment_window(align)
+    taxi_window, headings = taxi_reference(taxi, track_heading, window)
     if drift != "auto" and not (isinstance(drift, (int, float)) and 0 <= drift < math.inf):
         raise InputError(
             f"drift {drift!r}", fix="give auto, 0 (no aging) or a positive scale in the gyros' unit"
@@ -289,10 +305,12 @@ def infield_update(
     columns = {"gyro": gyro_columns, "accel": accel_columns, "temperature": temperature}
     columns |= {"unit": unit, "accel_unit": accel_unit}
     options = {"rate_hz": rate_hz, "time_column": time_column, "time_unit": time_unit}
-    gyro, accel, heat, first, heat_unit, notes = read_alignment(recording, window, columns, options)
+    read = window if taxi_window is None else (window[0], taxi_window[1])
+    gyro, accel, heat, first, heat_unit, notes = read_alignment(recording, read, columns, options)
     old = old_calibrations(calibration, gyro_columns, first.unit, heat_unit)
     si = parse_unit(first.unit).to_si
-    moved = find_motion(gyro * si, accel, first.rate_hz)
+    park = min(gyro.shape[0], round((window[1] - window[0]) * first.rate_hz))
+    moved = find_motion(gyro[:park] * si, accel[:park], first.rate_hz)
     if moved is not None:
         raise InputError(
             f"the vehicle moves during the alignment window: at t = {first.start_s + moved[0]:.1f}"
@@ -306,6 +324,10 @@ def infield_update(
     priors = gyro_priors(old, heat, first.rate_hz, si)
     sd_c0 = float(np.exp(np.mean([0.5 * math.log(p.covariance[0, 0]) for p in priors])))
     location = math.log(DRIFT_PRIOR_SCALE * sd_c0)
+    reference = None
+    if taxi_window is not None and headings:
+        start = round((taxi_window[0] - window[0]) * first.rate_hz)
+        reference = TaxiReference(start_sample=start, headings_deg=headings)
     alignment = fine_alignment(
         compensated,
         accel,
@@ -315,6 +337,8 @@ def infield_update(
         height=height,
         reference_drift=math.exp(location),
         accel_instability=accel_instability,
+        park_samples=park,
+        taxi=reference,
     )
     posterior = sample_alignment(
         alignment,
@@ -333,6 +357,9 @@ def infield_update(
         "window": window,
         "notes": notes,
         "drift": drift,
+        "taxi": taxi_window,
+        "headings": headings,
+        "park_samples": park,
     }
     return _result(alignment, posterior, old, heat, priors, context)
 
@@ -340,8 +367,12 @@ def infield_update(
 def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InFieldUpdate:
     """Every part of the :class:`InFieldUpdate` from the alignment and its posterior."""
     si, unit = context["si"], context["unit"]
-    attitude = alignment.trajectory.attitude[-1]
-    heading = np.degrees(posterior.states[:, TILT] @ _heading_row(attitude))
+    final_attitude = alignment.trajectory.attitude[-1]
+    attitude = alignment.trajectory.attitude[alignment.park_steps - 1]
+    park_heat = heat[: context["park_samples"]]
+    heading = np.degrees(posterior.states[:, TILT] @ _heading_row(final_attitude))
+    taxi = taxi_summary(alignment, context)
+    told = bool(taxi and taxi["informative"])
     if posterior.diagnostics is None:
         sampler = {
             "passed": True,
@@ -352,7 +383,7 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
         sampler = posterior.diagnostics.as_dict()
     drift = {**summary(posterior.drift / si, unit), "learned": posterior.diagnostics is not None}
     drift["scale"] = drift.pop("mean")
-    axes = informed_axes(attitude, list(old))
+    axes = informed_axes(attitude, list(old), taxi=told)
     new = calibrations(alignment, posterior, old, heat, axes, sampler, drift, context)
     latitude = math.radians(context["latitude"])
     gravity = normal_gravity(context["latitude"], context["height"])
@@ -372,17 +403,23 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
                 strict=True,
             )
         )
-        for c in (alignment.coarse_attitude, attitude)
+        for c in (alignment.coarse_attitude, final_attitude)
     )
     notes = calibration_notes(old, heat, axes, posterior.drift, context)
+    if taxi is not None and not told:
+        notes.append(taxi["why"])
+    east, east_old = projection(alignment.layout, priors, old, park_heat, attitude, 1, "level")
+    correlation = float(np.corrcoef(heading, posterior.states @ east + east_old)[0, 1])
     return InFieldUpdate(
         calibration=new,
         heading_error={
             **summary(heading, "deg"),
-            "definition": "computed minus true heading at the alignment's end",
+            "correlation_with_east_level": correlation,
+            "definition": "computed minus true heading at the window's end (the taxi's end "
+            "when there is one)",
         },
-        points=points(alignment, old, heat, posterior, si),
-        classical=classical(alignment, old, heat, attitude, latitude, gravity, si),
+        points=points(alignment, old, park_heat, posterior, si),
+        classical=classical(alignment, old, park_heat, attitude, latitude, gravity, si),
         checks={
             "passed": not failures,
             "failures": failures,
@@ -390,7 +427,7 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
             "innovations": innovations,
         },
         axes=axes,
-        projections=projections(alignment, priors, old, heat, posterior, attitude),
+        projections=projections(alignment, priors, old, park_heat, posterior, attitude, told),
         drift=drift,
         alignment={
             "start_s": context["window"][0],
@@ -409,6 +446,7 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
             },
             "filter_step_s": float(alignment.times[1] - alignment.times[0]),
         },
+        taxi=taxi,
         notes=tuple(notes),
         posterior=posterior,
     )

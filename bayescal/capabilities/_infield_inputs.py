@@ -39,6 +39,45 @@ def alignment_window(align) -> tuple[float, float]:
     return start, stop
 
 
+def taxi_reference(taxi, track_heading, window) -> tuple[tuple[float, float] | None, tuple]:
+    """The taxi's window (s from the first sample; None without one) and the known track
+    headings (deg, a tuple; empty without them), checked."""
+    if taxi is None:
+        if track_heading is not None:
+            raise InputError(
+                "track_heading was given without a taxi",
+                fix="give the taxi's window (t0, t1) too, or leave the track heading out",
+            )
+        return None, ()
+    try:
+        start, stop = (float(value) for value in taxi)
+    except (TypeError, ValueError):
+        start = stop = math.nan
+    if not (math.isfinite(start) and math.isfinite(stop) and stop > start):
+        raise InputError(
+            f"taxi {taxi!r}", fix="give the taxi as (t0, t1), seconds from the first sample"
+        )
+    if start < window[1]:
+        raise InputError(
+            f"the taxi {start:g}:{stop:g} starts before the alignment window {window[0]:g}:"
+            f"{window[1]:g} ends",
+            fix="give a taxi that starts at or after the end of the still window",
+        )
+    if track_heading is None:
+        return (start, stop), ()
+    values = track_heading.split(",") if isinstance(track_heading, str) else track_heading
+    try:
+        headings = tuple(float(value) for value in np.atleast_1d(values))
+    except (TypeError, ValueError):
+        headings = ()
+    if not headings or not all(math.isfinite(h) for h in headings):
+        raise InputError(
+            f"track_heading {track_heading!r}",
+            fix="give the taxiway's heading in degrees from north, one per straight leg",
+        )
+    return (start, stop), headings
+
+
 def _temperature_columns(recording: Recording, temperature) -> list[str]:
     if temperature is None or (isinstance(temperature, str) and "," not in temperature):
         return [find_temperature_column(recording, temperature)] * 3
@@ -84,8 +123,8 @@ def read_alignment(recording: Recording, window, columns: dict, options: dict):
         )
     if gyros[0].duration_s < window[1] - window[0] - 1.5 / gyros[0].rate_hz:
         raise InputError(
-            f"the recording ends at {gyros[0].stop_s:.6g} s, inside the alignment window "
-            f"{window[0]:g}:{window[1]:g}",
+            f"the recording ends at {gyros[0].stop_s:.6g} s, inside the window "
+            f"{window[0]:g}:{window[1]:g} (the alignment, and the taxi if given)",
             source=recording.source,
             fix="give a window inside the recording",
         )

@@ -39,36 +39,48 @@ def _slope_weights(degree: int, temperature: float, reference: float) -> np.ndar
     return power * (temperature - reference) ** np.maximum(power - 1, 0)
 
 
-def projections(alignment, priors, old, heat, posterior, attitude) -> dict:
+def projection(layout, priors, old, heat, attitude, row: int, kind: str):
+    """The vector that turns the coefficients' changes (the state, SI) into one projection of
+    the gyro biases (row 0, 1, 2 of C_b^n ``attitude``: north, east, down; ``kind`` "level",
+    "level_at_reference" or "slope", over the still samples ``heat``), and the old
+    calibration's part of it (rad/s or rad/s/degC)."""
+    vector, old_part = np.zeros(len(layout.names)), 0.0
+    park = heat.shape[0]
+    for axis, (prior, calibration) in enumerate(zip(priors, old.values(), strict=True)):
+        degree, reference = calibration.degree, calibration.reference
+        if kind == "level":
+            weights = prior.powers[:park].mean(axis=0)
+        elif kind == "slope":
+            weights = _slope_weights(degree, float(heat[:, axis].mean()), reference)
+        else:
+            weights = np.eye(degree + 1)[0]
+        vector[layout.coefficients[axis]] = attitude[row, axis] * weights
+        old_value = float(weights @ calibration.coefficients)
+        old_part += attitude[row, axis] * old_value * parse_unit(calibration.unit).to_si
+    return vector, old_part
+
+
+def projections(alignment, priors, old, heat, posterior, attitude, east_informed=False) -> dict:
     """The north, east and down projections of the gyro biases, old calibration plus change:
-    their mean over the alignment ("level", what the tilt rates measure), their value at each
+    their mean over the park ("level", what the tilt rates measure), their value at each
     gyro's reference temperature ("level_at_reference", the polynomials' constant: east, the
     one the heading error hides) and their slope at each gyro's mean temperature; posterior
-    summary and prior sd (given s, averaged over its posterior), deg/h and deg/h/degC."""
+    summary and prior sd (given s, averaged over its posterior), deg/h and deg/h/degC.
+    ``heat`` and ``attitude`` are the park's; ``east_informed``: whether a taxi told the
+    heading, and so the east level."""
     layout, model = alignment.layout, alignment.model
     scale = np.asarray(model.scale)
     drifts = np.quantile(posterior.drift, np.linspace(0.01, 0.99, 50))
     priors_s = [np.asarray(model.prior(s)) for s in drifts]
     informed = {
         "north": {"level": True, "level_at_reference": True, "slope": True},
-        "east": {"level": False, "level_at_reference": False, "slope": True},
+        "east": {"level": east_informed, "level_at_reference": east_informed, "slope": True},
         "down": {"level": False, "level_at_reference": False, "slope": False},
     }
     found = {}
     for row, direction in enumerate(informed):
         for kind in informed[direction]:
-            vector, old_part = np.zeros(len(layout.names)), 0.0
-            for axis, (prior, calibration) in enumerate(zip(priors, old.values(), strict=True)):
-                degree, reference = calibration.degree, calibration.reference
-                if kind == "level":
-                    weights = prior.powers.mean(axis=0)
-                elif kind == "slope":
-                    weights = _slope_weights(degree, float(heat[:, axis].mean()), reference)
-                else:
-                    weights = np.eye(degree + 1)[0]
-                vector[layout.coefficients[axis]] = attitude[row, axis] * weights
-                old_value = float(weights @ calibration.coefficients)
-                old_part += attitude[row, axis] * old_value * parse_unit(calibration.unit).to_si
+            vector, old_part = projection(layout, priors, old, heat, attitude, row, kind)
             scaled = vector * scale
             variance = np.mean([scaled @ prior_s @ scaled for prior_s in priors_s])
             entry = summary(
@@ -88,7 +100,8 @@ def points(alignment, old, heat, posterior, si: float) -> dict:
     means, covariances = (np.asarray(x) for x in alignment.model.smooth(posterior.filtered))
     block = layout.all_coefficients
     draws = posterior.states[:, block] / scale[block]
-    steps = [int(index[index.size // 2]) for index in blocks(alignment.times)]
+    park = alignment.times[: alignment.park_steps]
+    steps = [int(index[index.size // 2]) for index in blocks(park)]
     found = {}
     for axis, (name, calibration) in enumerate(old.items()):
         samples = [min(k * alignment.step_samples, heat.shape[0] - 1) for k in steps]
@@ -115,8 +128,9 @@ def classical(alignment, old, heat, attitude, latitude, gravity: float, si: floa
     """The patent's tilt rates block by block (:mod:`bayescal.navigation._tilt_rates`), as
     north and east points and as each gyro's points (its vertical part from the old
     calibration)."""
+    park = alignment.park_steps
     rows = tilt_rate_points(
-        alignment.times, alignment.trajectory.velocity[:, :2], latitude, gravity
+        alignment.times[:park], alignment.trajectory.velocity[:park, :2], latitude, gravity
     )
     axes = {}
     for axis, (name, calibration) in enumerate(old.items()):
@@ -178,7 +192,7 @@ def updated(calibration, draws, si: float, heat, step: dict, sampler: dict, drif
     )
 
 
-def informed_axes(attitude, names) -> dict:
+def informed_axes(attitude, names, taxi: bool = False) -> dict:
     """Per gyro (``names`` in x, y, z order), whether the alignment informs it: its axis's
     horizontal part at C_b^n ``attitude`` against INFORMED_HORIZONTAL, and why."""
     axes = {}
@@ -188,15 +202,52 @@ def informed_axes(attitude, names) -> dict:
         informed = horizontal >= INFORMED_HORIZONTAL
         why = (
             f"{tilt:.0f} deg from the vertical: its bias projects on north and east, so the "
-            "north projection and the thermal slopes are informed; the east level is one "
-            "quantity with the heading error (kept at its prior until a taxi or a heading "
-            "reference)"
+            "north projection and the thermal slopes are informed; "
+            + (
+                "the east level through the heading the taxi told"
+                if taxi
+                else "the east level is one quantity with the heading error (kept at its prior "
+                "until a taxi or a heading reference)"
+            )
             if informed
             else f"{tilt:.0f} deg from the vertical: the alignment sees a vertical gyro's bias "
             "only through the heading's slow drift, which the east bias hides; not updated"
         )
         axes[name] = {"informed_by_alignment": informed, "updated": informed, "why": why}
     return axes
+
+
+def taxi_summary(alignment, context) -> dict | None:
+    """The taxi as the filter used it: its window, the track headings, the steps on each leg,
+    and whether it told the heading (and why not)."""
+    if context["taxi"] is None:
+        return None
+    headings = context["headings"]
+    legs = alignment.legs
+    counts = [int(np.sum(legs == i)) for i in range(len(headings))] if legs is not None else []
+    informative = sum(counts) > 0
+    if not headings:
+        why = (
+            "the taxi gave no heading information: no track heading was given (a taxi without a "
+            "known track or a position reference cannot tell the heading error from the east "
+            "bias level); the east level stays at its prior"
+        )
+    elif not informative:
+        why = (
+            "the taxi gave no heading information: no filter step lay on a leg of the given "
+            "track headings (computed track within 1 deg of one for 5 s either side, at 3.1 m/s "
+            "or more); the east level stays at its prior"
+        )
+    else:
+        why = "the cross-track velocity on the legs told the heading error"
+    return {
+        "start_s": context["taxi"][0],
+        "stop_s": context["taxi"][1],
+        "track_heading_deg": list(headings),
+        "steps_on_legs": counts,
+        "informative": informative,
+        "why": why,
+    }
 
 
 def innovation_check(filtered) -> dict:

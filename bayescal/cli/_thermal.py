@@ -128,9 +128,16 @@ def _add_infield(steps) -> None:
         metavar="T0:T1",
         help="the still alignment window, seconds from the first sample (at least 300 s)",
     )
-    infield.add_argument("--taxi", metavar="T0:T1", help="the taxi (not yet supported)")
     infield.add_argument(
-        "--track-heading", metavar="DEG", help="the taxiway's heading (not yet supported)"
+        "--taxi",
+        metavar="T0:T1",
+        help="the taxi after the park, seconds from the first sample: with --track-heading it "
+        "tells the heading error, and so the east bias level",
+    )
+    infield.add_argument(
+        "--track-heading",
+        metavar="DEG[,DEG...]",
+        help="the taxiway's known track heading, deg from north, one per straight leg",
     )
     infield.add_argument(
         "--accel-unit", metavar="UNIT", help="unit of the accelerometers (default m/s^2)"

@@ -69,6 +69,7 @@ from ._error_model import (
 from ._frames import dcm_from_euler, euler_from_dcm, skew
 from ._kalman import StateSpace, kalman_filter, rts_smoother
 from ._strapdown import Trajectory, mechanize
+from ._taxi import TaxiReference, cross_track_row, leg_steps, wander_model
 
 STEP_S = 1.0
 """Seconds between the velocity measurements of the fine alignment."""
@@ -184,13 +185,15 @@ class Layout:
     """One per gyro."""
     walks: tuple[int | None, ...]
     """The index of each gyro's random walk, None where it has none."""
+    wander: slice | None = None
+    """The taxi's cross-track wander and its rate (:mod:`._taxi`), None without a taxi."""
 
     @property
     def all_coefficients(self) -> slice:
         return slice(self.coefficients[0].start, self.coefficients[-1].stop)
 
 
-def _layout(priors) -> Layout:
+def _layout(priors, wander: bool = False) -> Layout:
     names = [*NAVIGATION_STATES, "nabla_x", "nabla_y", "nabla_z"]
     coefficients = []
     for axis, prior in enumerate(priors):
@@ -204,7 +207,13 @@ def _layout(priors) -> Layout:
             names.append(f"walk_{'xyz'[axis]}")
         else:
             walks.append(None)
-    return Layout(tuple(names), slice(0, 7), slice(7, 10), tuple(coefficients), tuple(walks))
+    lateral = None
+    if wander:
+        lateral = slice(len(names), len(names) + 2)
+        names += ["wander", "wander_rate"]
+    return Layout(
+        tuple(names), slice(0, 7), slice(7, 10), tuple(coefficients), tuple(walks), lateral
+    )
 
 
 def _interval_means(values, size: int, count: int):
@@ -256,6 +265,43 @@ class FineAlignment:
     noise: dict
     """The white-noise densities used: gyro (rad/s/sqrt(Hz)) and accel (m/s^2/sqrt(Hz))."""
     step_samples: int
+    park_steps: int = 0
+    """How many filter steps lie in the park (the still part): the first ones."""
+    legs: np.ndarray | None = None
+    """(K,) the taxi leg each step lies on (an index into the track headings), -1 off the
+    legs; None without a taxi."""
+
+
+def _measurements(layout: Layout, velocity, correction, park_steps: int, legs, taxi):
+    """The measurement rows and values at every step: the computed north and east velocity at
+    the park's steps (the vehicle is still), the computed cross-track velocity at the taxi's
+    steps on a leg (:func:`~._taxi.cross_track_row`, linearized at the velocity less
+    ``correction``); NaN where nothing is measured."""
+    count, n = velocity.shape[0], len(layout.names)
+    rows = 2 if taxi is None else 3
+    observation = np.zeros((count, rows, n))
+    measured = np.full((count, rows), np.nan)
+    observation[:park_steps, 0, VELOCITY.start] = 1.0
+    observation[:park_steps, 1, VELOCITY.start + 1] = 1.0
+    measured[1:park_steps, :2] = velocity[1:park_steps, :2]
+    if legs is not None:
+        for k in np.flatnonzero(legs >= 0):
+            across, tilt = cross_track_row(taxi.headings_deg[legs[k]], velocity[k] - correction[k])
+            observation[k, 2, VELOCITY] = across
+            observation[k, 2, TILT] = tilt
+            observation[k, 2, layout.wander.start + 1] = 1.0
+            measured[k, 2] = across @ velocity[k, :2]
+    return observation, measured
+
+
+def _velocity_error(model: "AlignmentModel", drift: float, velocity) -> np.ndarray:
+    """The smoothed velocity error, computed minus true (north, east, down; m/s), at every
+    step: delta v + v x phi of the modified phi-angle model (:mod:`._error_model`)."""
+    means, _ = model.smooth(model.filter(drift))
+    states = np.asarray(means) * np.asarray(model.scale)
+    error = np.zeros((states.shape[0], 3))
+    error[:, :2] = states[:, VELOCITY]
+    return error + np.cross(velocity, states[:, TILT])
 
 
 def white_noise_density(values, rate_hz: float) -> np.ndarray:
@@ -266,16 +312,20 @@ def white_noise_density(values, rate_hz: float) -> np.ndarray:
     return spread / math.sqrt(2) / math.sqrt(rate_hz)
 
 
-def _dynamics(trajectory, priors, layout: Layout, size: int, count: int, height, gravity):
+def _dynamics(
+    trajectory, priors, layout: Layout, size: int, count: int, height, gravity, wander, correction
+):
     """F of the whole state per interval (the error model at the interval's middle, the
-    temperature powers averaged over it), and the sensors' input matrices there."""
+    temperature powers averaged over it, the velocity less ``correction``, the estimated
+    velocity error at each step), and the sensors' input matrices there."""
     middle = np.arange(count - 1) * size + size // 2
+    velocity = trajectory.velocity[middle] - 0.5 * (correction[:-1] + correction[1:])
     dynamics, gyro_input, accel_input = (
         np.asarray(x)
         for x in error_dynamics(
             trajectory.latitude[middle],
             height,
-            trajectory.velocity[middle],
+            velocity,
             trajectory.attitude[middle],
             np.full(middle.size, gravity),
         )
@@ -289,10 +339,12 @@ def _dynamics(trajectory, priors, layout: Layout, size: int, count: int, height,
         full[:, nav, layout.coefficients[axis]] = gyro_input[:, :, axis, None] * powers[:, None, :]
         if layout.walks[axis] is not None:
             full[:, nav, layout.walks[axis]] = gyro_input[:, :, axis]
+    if layout.wander is not None:
+        full[:, layout.wander, layout.wander] = wander_model(*wander)[0]
     return full, gyro_input, accel_input
 
 
-def _noise(layout: Layout, priors, inputs, densities, accel_walk: float):
+def _noise(layout: Layout, priors, inputs, densities, accel_walk: float, wander):
     """The white noise's power spectral density matrix per interval: the gyros' and
     accelerometers' white noise through their input matrices, the random walks'."""
     gyro_input, accel_input = inputs
@@ -305,10 +357,12 @@ def _noise(layout: Layout, priors, inputs, densities, accel_walk: float):
     for axis, prior in enumerate(priors):
         if layout.walks[axis] is not None:
             noise[:, layout.walks[axis], layout.walks[axis]] = prior.instability
+    if layout.wander is not None:
+        noise[:, layout.wander, layout.wander] = wander_model(*wander)[1]
     return noise
 
 
-def _prior(layout: Layout, priors, reference_drift: float, duration: float):
+def _prior(layout: Layout, priors, reference_drift: float, duration: float, wander):
     """The prior covariance of x_0 without drift (the coarse alignment's tilts, the
     accelerometer biases, the calibrations' coefficients), each state's drift per unit s, and
     the states' scales (their prior sd at the reference s)."""
@@ -324,6 +378,8 @@ def _prior(layout: Layout, priors, reference_drift: float, duration: float):
         shape[block] = gyro.drift_shape
         if layout.walks[axis] is not None:
             prior[layout.walks[axis], layout.walks[axis]] = gyro.offset_variance
+    if layout.wander is not None:
+        prior[layout.wander, layout.wander] = wander_model(*wander)[2]
     scale = np.sqrt(np.diag(prior) + (reference_drift * shape) ** 2)
     # Position and velocity start known (the vehicle is still where it is): scaled by sizes
     # their errors reach, 1 m and 1 cm/s.
@@ -349,58 +405,93 @@ def fine_alignment(
     accel_instability: float,
     velocity_noise: float = VELOCITY_NOISE,
     step_s: float = STEP_S,
+    park_samples: int | None = None,
+    taxi: TaxiReference | None = None,
 ) -> FineAlignment:
-    """Mechanize a still record from its coarse alignment and set up the fine-alignment model.
+    """Mechanize a record from its coarse alignment and set up the fine-alignment model.
 
     ``gyro`` (rad/s, the old calibration's thermal bias taken off) and ``accel`` (m/s^2) are
     (n, 3); ``latitude`` in rad, ``height`` in m; ``reference_drift`` the drift scale s (rad/s)
     of the filter's reference run (:class:`DriftProblem` moves it); ``accel_instability`` the
     accelerometers' bias instability B (m/s^2), turned into a random walk as the gyros' is.
+
+    The first ``park_samples`` (default: all) are still: the coarse alignment and the white
+    noise are read from them, and the computed velocity at each of their steps is measured as
+    zero. A ``taxi`` after them (:class:`~._taxi.TaxiReference`) adds the wander's two states
+    and, at each step on a leg of known heading (:func:`~._taxi.leg_steps`), the computed
+    cross-track velocity as a measurement of (delta v, phi, the wander's rate)
+    (:func:`~._taxi.cross_track_row`); the steps between (the start, the turns) are
+    mechanized and measure nothing.
     """
     gyro = np.asarray(gyro, dtype=float)
     accel = np.asarray(accel, dtype=float)
+    park_samples = gyro.shape[0] if park_samples is None else int(park_samples)
     size = max(1, round(step_s * rate_hz))
     count = gyro.shape[0] // size + 1
     if count < 3:
         raise InputError(f"{gyro.shape[0]} samples make fewer than three filter steps")
     duration = gyro.shape[0] / rate_hz
-    attitude = coarse_alignment(gyro.mean(axis=0), accel.mean(axis=0))
+    still_gyro, still_accel = gyro[:park_samples], accel[:park_samples]
+    attitude = coarse_alignment(still_gyro.mean(axis=0), still_accel.mean(axis=0))
     trajectory = mechanize(
         gyro, accel, rate_hz, latitude=latitude, height=height, attitude=attitude
     )
     gravity = normal_gravity(math.degrees(latitude), height)
-    layout = _layout(priors)
-    n = len(layout.names)
-    full, *inputs = _dynamics(trajectory, priors, layout, size, count, height, gravity)
-    densities = (white_noise_density(gyro, rate_hz), white_noise_density(accel, rate_hz))
+    layout = _layout(priors, wander=taxi is not None)
+    wander = None if taxi is None else (taxi.wander_sd, taxi.wander_time_s)
+    densities = (
+        white_noise_density(still_gyro, rate_hz),
+        white_noise_density(still_accel, rate_hz),
+    )
     accel_walk = bounding_walk_variance(
         "bias_instability", {"B": accel_instability}, duration, rate_hz
     )
-    noise = _noise(layout, priors, inputs, densities, accel_walk)
-    transition, process = discretize(jnp.asarray(full), jnp.asarray(noise), step_s)
-    prior, shape, scale = _prior(layout, priors, reference_drift, duration)
-    observation = np.zeros((count, 2, n))
-    observation[:, 0, VELOCITY.start] = observation[:, 1, VELOCITY.start + 1] = 1.0
-    measured = trajectory.velocity[::size][:count, :2].copy()
-    measured[0] = np.nan
-    space = StateSpace(
-        jnp.concatenate([jnp.eye(n)[None], transition]),
-        jnp.concatenate([jnp.zeros((1, n, n)), process]),
-        jnp.asarray(observation),
-        jnp.broadcast_to(velocity_noise**2 * jnp.eye(2), (count, 2, 2)),
-    ).scaled(scale)
-    model = AlignmentModel(
-        space=space,
-        observations=jnp.asarray(measured),
-        scale=jnp.asarray(scale),
-        prior_fixed=jnp.asarray(prior / np.outer(scale, scale)),
-        drift_shape=jnp.asarray(shape / scale),
-    )
+    prior, shape, scale = _prior(layout, priors, reference_drift, duration, wander)
     steps = np.arange(count) * size
+    times = steps / rate_hz
+    park_steps = int(np.sum(steps <= park_samples))
+
+    def assemble(correction, legs):
+        full, *inputs = _dynamics(
+            trajectory, priors, layout, size, count, height, gravity, wander, correction
+        )
+        noise = _noise(layout, priors, inputs, densities, accel_walk, wander)
+        transition, process = discretize(jnp.asarray(full), jnp.asarray(noise), step_s)
+        observation, measured = _measurements(
+            layout, trajectory.velocity[steps], correction, park_steps, legs, taxi
+        )
+        n = len(layout.names)
+        rows = measured.shape[1]
+        space = StateSpace(
+            jnp.concatenate([jnp.eye(n)[None], transition]),
+            jnp.concatenate([jnp.zeros((1, n, n)), process]),
+            jnp.asarray(observation),
+            jnp.broadcast_to(velocity_noise**2 * jnp.eye(rows), (count, rows, rows)),
+        ).scaled(scale)
+        return AlignmentModel(
+            space=space,
+            observations=jnp.asarray(measured),
+            scale=jnp.asarray(scale),
+            prior_fixed=jnp.asarray(prior / np.outer(scale, scale)),
+            drift_shape=jnp.asarray(shape / scale),
+        )
+
+    correction = np.zeros((count, 3))
+    legs = None if taxi is None else np.full(count, -1)
+    model = assemble(correction, legs)
+    if taxi is not None:
+        # Mechanized freely from the coarse alignment, the computed velocity carries the park's
+        # errors (the Schuler loop's, up to m/s) into the taxi: the legs are found, and the
+        # cross-track rows and the error model linearized, on the velocity less its error as
+        # the park predicts it (the filter and smoother without the taxi's measurements).
+        correction = _velocity_error(model, reference_drift, trajectory.velocity[steps])
+        legs = leg_steps(times, trajectory.velocity[steps] - correction, taxi.headings_deg)
+        legs[steps < taxi.start_sample] = -1
+        model = assemble(correction, legs)
     return FineAlignment(
         model=model,
         layout=layout,
-        times=steps / rate_hz,
+        times=times,
         trajectory=Trajectory(
             time=trajectory.time[steps],
             latitude=trajectory.latitude[steps],
@@ -412,6 +503,8 @@ def fine_alignment(
         coarse_attitude=attitude,
         noise=dict(zip(("gyro", "accel"), densities, strict=True)),
         step_samples=size,
+        park_steps=park_steps,
+        legs=legs,
     )
 
 

@@ -18,9 +18,23 @@ def infield_text(document: dict) -> str:
         f"pitch {attitude['pitch']:.3f}, heading {attitude['heading']:.3f} deg",
         "  heading error (computed - true) at the end: "
         + _interval(document["heading_error"])
-        + "  (at rest: the east bias level seen as heading)",
+        + (
+            "  (at rest: the east bias level seen as heading)"
+            if not (document.get("taxi") or {}).get("informative")
+            else "  (told by the taxi)"
+        )
+        + "; correlation with the east level "
+        + f"{document['heading_error']['correlation_with_east_level']:+.2f}",
         "  projected gyro bias           posterior                                  prior sd",
     ]
+    taxi = document.get("taxi")
+    if taxi:
+        lines.insert(
+            1,
+            f"  taxi {taxi['start_s']:g}-{taxi['stop_s']:g} s, track headings "
+            f"{', '.join(f'{h:g}' for h in taxi['track_heading_deg']) or 'none'} deg: "
+            f"{sum(taxi['steps_on_legs'])} s on the legs ({taxi['why']})",
+        )
     for direction, kinds in document["projections"].items():
         for kind, entry in kinds.items():
             told = "informed" if entry["informed"] else "NOT informed by the alignment"

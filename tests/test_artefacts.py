@@ -9,7 +9,7 @@ from recording_files import write_csv
 
 import bayescal as bc
 from bayescal.classical._noise import TIntervalCheck
-from bayescal.report._noise import _t_interval_explanation
+from bayescal.report._noise import t_interval_explanation
 
 RATE = 100.0
 SAMPLES = 2000
@@ -109,7 +109,7 @@ def test_the_student_t_sentence_says_where_its_interval_lies(low, high, says):
     class Classical:
         t_interval = check
 
-    sentence = _t_interval_explanation(Classical())
+    sentence = t_interval_explanation(Classical())
     assert says in sentence
     if says != "includes 1":
         assert "includes 1" not in sentence

@@ -175,6 +175,7 @@ def test_term_names():
         "rate_random_walk",
         "rate_ramp",
         "gauss_markov",
+        "spectral_lines",
     )
     assert parse_terms("n,GM") == ("white", "gauss_markov")
     with pytest.raises(bc.InputError, match="add white"):

@@ -551,7 +551,9 @@ def _channel_section(analysis: ChannelAnalysis, findings: Findings | None) -> st
         if analysis.spectrum is not None:
             parts.append(
                 embedded(
-                    spectrum_figure(channel, unit, analysis.spectrum, _line_frequencies(fit)),
+                    spectrum_figure(
+                        channel, unit, analysis.spectrum, _line_frequencies(noise.noise)
+                    ),
                     f"{channel}: spectrum",
                 )
             )

@@ -77,6 +77,7 @@ _EXPORTS = {
     "RecordingPlan": "capabilities._plan",
     "filter_noise": "capabilities._filter_noise",
     "FilterNoise": "capabilities._filter_noise",
+    "Aiding": "navigation._aiding",
     "within_spec": "capabilities._within_spec",
     "SpecCheck": "capabilities._within_spec",
     "fit_fleet": "capabilities._fleet",

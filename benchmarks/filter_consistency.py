@@ -5,10 +5,14 @@ values).
     python benchmarks/filter_consistency.py [--runs 50] [--minutes 10] [--static-minutes 60]
                                             [--horizons 600,60] [--seed 1]
 
-For each grade (MEMS and tactical, the truths below, SI), a static record of each sensor
-(``--static-minutes`` at 100 Hz: white noise through a one-tap output filter F = 0.3, bias
-instability, rate random walk) is fitted with those terms (``bc.fit_noise``) and exported for
-Kalibr (``bc.filter_noise``, continuous-time N and K) at each ``--horizon``; the Allan-line
+For each grade (MEMS, tactical, and the MEMS unit on a vibrating vehicle; the truths below,
+SI), a static record of each sensor (``--static-minutes`` at 100 Hz: white noise through a
+one-tap output filter F = 0.3, bias instability, rate random walk) is fitted with those terms
+(``bc.fit_noise``) and exported for Kalibr (``bc.filter_noise``, continuous-time N and K) at
+each ``--horizon`` and with each channel's horizon from the drive's aiding (``aiding=``); for
+the vibrating vehicle also with a 10-minute record with the motors running (``vibration=``),
+whose extra white noise the drive carries (the vibration enters before the output filter,
+the white noise doubled in the gyro and tripled in the accelerometer); the Allan-line
 values are the classical readings of the same records (N on the -1/2 line at tau = 1 s, K on
 the +1/2 line at tau = 3 s, as read). Then ``--runs`` seeded drives of ``--minutes`` (a
 vehicle at 10 m/s swinging its heading +-90 deg every minute, position fixes of 1 m sd every
@@ -56,17 +60,26 @@ GRADES = {
         accel_bias_sd=1e-3,
     ),
 }
+# The MEMS unit on a vibrating vehicle: its white noise doubled (gyro) and tripled
+# (accelerometer) while it moves, measured by a static record with the motors running.
+GRADES["MEMS, vibrating"] = Grade(
+    GRADES["MEMS"].gyro,
+    GRADES["MEMS"].accel,
+    GRADES["MEMS"].gyro_bias_sd,
+    GRADES["MEMS"].accel_bias_sd,
+    vibration=(math.sqrt(3) * GRADES["MEMS"].gyro["N"], math.sqrt(8) * GRADES["MEMS"].accel["N"]),
+)
 TERMS = ("white", "output_filter", "bias_instability", "rate_random_walk")
 
 
-def values_of(grade: Grade, minutes: float, horizons, seed: int) -> dict:
+def values_of(grade: Grade, minutes: float, horizons, aiding: bc.Aiding, seed: int) -> dict:
     """label -> (white (gyro, accel), walk (gyro, accel)), SI: exported at each horizon and
-    the Allan line's readings."""
+    with the horizon from the aiding (and, for a vibrating grade, with and without the motors'
+    record), and the Allan line's readings."""
     n = round(minutes * 60 * RATE)
-    fits, allan = [], {"N": [], "K": []}
-    for index, (name, unit, truth) in enumerate(
-        (("gyro_x", "rad/s", grade.gyro), ("acc_x", "m/s^2", grade.accel))
-    ):
+    fits, allan, shaking = [], {"N": [], "K": []}, {}
+    for index, (name, unit) in enumerate((("gyro_x", "rad/s"), ("acc_x", "m/s^2"))):
+        truth = grade.gyro if index == 0 else grade.accel
         record = bc.NoiseModel(rate_hz=RATE, **truth).simulate(n, seed=seed + index)
         fit = bc.fit_noise(record, RATE, terms=TERMS, unit=unit, channel=name, seed=seed)
         if not fit.passed:
@@ -74,12 +87,25 @@ def values_of(grade: Grade, minutes: float, horizons, seed: int) -> dict:
         fits.append(fit)
         for p in ("N", "K"):
             allan[p].append(fit.classical.slope_readings[p].value)
+        if any(grade.vibration):
+            motors = bc.NoiseModel(rate_hz=RATE, **grade.moving(3 * index))
+            shaking[name] = motors.simulate(round(10 * 60 * RATE), seed=seed + 10 + index)
+
+    def densities(noise) -> tuple:
+        return tuple(
+            tuple(noise.channels[c].density[p] for c in ("gyro_x", "acc_x")) for p in ("N", "K")
+        )
+
     found = {}
     for horizon in horizons:
         noise = bc.filter_noise(fits, estimator="kalibr", horizon=horizon)
-        found[f"exported, H = {horizon:g} s"] = tuple(
-            tuple(noise.channels[c].density[p] for c in ("gyro_x", "acc_x")) for p in ("N", "K")
-        )
+        found[f"exported, H = {horizon:g} s"] = densities(noise)
+    noise = bc.filter_noise(fits, estimator="kalibr", aiding=aiding)
+    spans = "/".join(f"{noise.channels[c].horizon_s:.0f}" for c in ("gyro_x", "acc_x"))
+    found[f"exported, aided H {spans} s"] = densities(noise)
+    if shaking:
+        noise = bc.filter_noise(fits, estimator="kalibr", aiding=aiding, vibration=shaking)
+        found["exported + vibration"] = densities(noise)
     found["Allan line"] = (tuple(allan["N"]), tuple(allan["K"]))
     return found
 
@@ -105,11 +131,12 @@ def main() -> None:
         f"band [{nis_band[0]:.3f}, {nis_band[1]:.3f}]"
     )
     for grade_name, grade in GRADES.items():
-        sets = values_of(grade, args.static_minutes, horizons, args.seed)
+        aiding = bc.Aiding("position", scenario.fix_sd_m, scenario.fix_interval_s)
+        sets = values_of(grade, args.static_minutes, horizons, aiding, args.seed)
         truth, fixes = simulate_runs(prepared, grade, args.runs, args.seed)
         print(f"  {grade_name}")
         print(
-            f"    {'values':<22}{'N_g':>10}{'K_g':>10}{'N_a':>10}{'K_a':>10}"
+            f"    {'values':<27}{'N_g':>10}{'K_g':>10}{'N_a':>10}{'K_a':>10}"
             f"{'NEES':>7}{'band':>14}{'inside':>8}{'above':>7}{'NIS in':>8}"
         )
         for label, (white, walk) in sets.items():
@@ -120,7 +147,7 @@ def main() -> None:
             above = np.mean(nees > high)
             nis_in = np.mean((nis >= nis_band[0]) & (nis <= nis_band[1]))
             print(
-                f"    {label:<22}{white[0]:>10.2e}{walk[0]:>10.2e}{white[1]:>10.2e}"
+                f"    {label:<27}{white[0]:>10.2e}{walk[0]:>10.2e}{white[1]:>10.2e}"
                 f"{walk[1]:>10.2e}{np.median(nees):>7.2f}  [{low:5.2f}, {high:5.2f}]"
                 f"{100 * inside:>7.0f}%{100 * above:>6.0f}%{100 * nis_in:>7.0f}%"
             )

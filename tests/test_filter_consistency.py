@@ -1,8 +1,8 @@
 """The filter consistency check in small (benchmarks/filter_consistency.py is the full study):
 a MEMS IMU with flicker on a moving vehicle with position fixes; a filter told the white noise
 and the bias's walk as bc.filter_noise makes them (the bias instability bounded over the
-filter's horizon) has the covariance of its errors, one told the bare Allan-line values is
-overconfident."""
+horizon that follows from the filter's aiding) has the covariance of its errors, one told the
+bare Allan-line values is overconfident."""
 
 import math
 
@@ -11,7 +11,8 @@ import pytest
 
 from bayescal.classical._noise import classical_noise
 from bayescal.models._noise_model import NoiseModel
-from bayescal.models._terms import bounding_walk_variance
+from bayescal.models._terms import TERMS, bounding_walk_variance
+from bayescal.navigation._aiding import Aiding, aided_horizon
 from bayescal.navigation._consistency import (
     Grade,
     Scenario,
@@ -31,11 +32,17 @@ MEMS = Grade(
     gyro_bias_sd=100 / 3600 * DEG,
     accel_bias_sd=5e-3,
 )
-HORIZON_S = 60.0
 
 
-def _exported(truth: dict) -> tuple[float, float]:
-    walk = truth["K"] ** 2 + bounding_walk_variance("bias_instability", truth, HORIZON_S, RATE)
+def _exported(truth: dict, sensor: str, scenario: Scenario) -> tuple[float, float]:
+    """N and the walk bounding K and B over the horizon the drive's fixes give the sensor."""
+    aiding = Aiding("position", scenario.fix_sd_m, scenario.fix_interval_s)
+
+    def deviation(tau: float) -> float:
+        return math.sqrt(TERMS["bias_instability"].allan_variance(tau, truth, RATE))
+
+    horizon = aided_horizon(aiding, sensor, deviation, shortest_s=3 / RATE)
+    walk = truth["K"] ** 2 + bounding_walk_variance("bias_instability", truth, horizon, RATE)
     return truth["N"], math.sqrt(walk)
 
 
@@ -62,7 +69,9 @@ def _inside(drives, white, walk):
 
 
 def test_exported_values_make_a_consistent_filter(drives):
-    gyro, accel = _exported(MEMS.gyro), _exported(MEMS.accel)
+    scenario = drives[0].scenario
+    gyro = _exported(MEMS.gyro, "gyroscope", scenario)
+    accel = _exported(MEMS.accel, "accelerometer", scenario)
     inside, _ = _inside(drives, (gyro[0], accel[0]), (gyro[1], accel[1]))
     assert inside >= 0.75
 

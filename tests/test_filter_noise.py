@@ -111,6 +111,49 @@ def test_a_longer_horizon_bounds_the_instability_by_a_smaller_walk():
     assert short_q == pytest.approx(10 * long_q, rel=1e-9)  # q ~ 1 / sqrt(H)
 
 
+@pytest.mark.parametrize(("kind", "sensor", "power", "factor"), [
+    ("position", "accelerometer", 2, 0.5),
+    ("velocity", "accelerometer", 1, 1.0),
+    ("position", "gyroscope", 3, 9.80665 / 6),
+    ("velocity", "gyroscope", 2, 9.80665 / 2),
+])  # fmt: skip
+def test_the_aiding_reveals_a_bias_as_least_squares_does(kind, sensor, power, factor):
+    """The asymptotic C_p of navigation/_aiding.py against the exact least-squares variance
+    of the leading coefficient of a polynomial fitted to fixes every second over 10 min."""
+    aiding = bc.Aiding(kind, sd=0.7, interval_s=1.0)
+    t = np.arange(0.5, 600.0, 1.0)
+    design = np.vander(t, power + 1, increasing=True)
+    exact = 0.7 * math.sqrt(np.linalg.inv(design.T @ design)[power, power]) / factor
+    assert aiding.revealed_bias_sd(sensor, 600.0) == pytest.approx(exact, rel=0.01)
+
+
+def test_each_channel_s_horizon_follows_from_the_aiding():
+    fits = example_fits()
+    noise = bc.filter_noise(fits, estimator="kalibr")  # the default aiding: 1 m every 1 s
+    # The gyro's bias is flicker alone beside the walk: sigma_A = sqrt(2 ln 2 / pi) B at every
+    # tau, and s(T) = sqrt(2800 / T) 1 m / (g / 6 T^3) equals it at T^3.5 = 6 sqrt(2800) / (g
+    # sigma_A), SI.
+    sigma = math.sqrt(2 * math.log(2) / math.pi) * 0.002 * math.pi / 180
+    expected = (6 * math.sqrt(2800) / (9.80665 * sigma)) ** (1 / 3.5)
+    assert noise.channels["gyro_x"].horizon_s == pytest.approx(expected, rel=1e-6)
+    q = noise.channels["gyro_x"].items["bias_instability"][0].value
+    assert q == pytest.approx(Q_B_RAD * math.sqrt(600.0 / expected), rel=1e-6)
+    assert noise.horizon_s is None and "assumed" in noise.notes[-1]
+    # A finer aiding sees the bias sooner: a shorter horizon, a larger walk.
+    finer = bc.filter_noise(fits, estimator="kalibr", aiding=bc.Aiding("position", 0.01, 0.1))
+    assert finer.channels["gyro_x"].horizon_s < expected / 3
+    assert "assumed" not in finer.notes[-1]
+    document = filter_document(finer)
+    assert document["aiding"] == {"kind": "position", "sd": 0.01, "unit": "m", "interval_s": 0.1}
+    assert document["channels"]["gyro_x"]["horizon_s"] == finer.channels["gyro_x"].horizon_s
+    with pytest.raises(InputError, match="give one"):
+        bc.filter_noise(fits, estimator="kalibr", horizon=60.0, aiding=bc.Aiding())
+    with pytest.raises(InputError, match="kind"):
+        bc.Aiding("gnss", 1.0, 1.0)
+    with pytest.raises(InputError, match="interval_s"):
+        bc.Aiding("position", 1.0, 0.0)
+
+
 def _parsed(name: str, text: str, tmp_path) -> dict:
     """The file read as its estimator reads it: name -> value."""
     convention = estimator(name)
@@ -173,6 +216,16 @@ def test_vibration_adds_its_excess_density_to_n():
     noise = bc.filter_noise([gyro, accel], estimator="kalibr", vibration={"gyro_x": shaking})
     extra = noise.channels["gyro_x"].items["vibration"][0].value
     assert extra == pytest.approx(math.sqrt(3) * N_GYRO_RAD, rel=0.05)
+    # Through the sensor's output filter the vibration is read before it: its density
+    # divided by the fitted filter's gain.
+    filtered = fake_fit(
+        "gyro_x", "deg/s", {"N": 0.005, "F": 0.3}, ("white", "output_filter"), rate_hz=rate
+    )
+    shaking = bc.NoiseModel(rate_hz=rate, N=0.01, F=0.3).simulate(2**15, seed=5)
+    noise = bc.filter_noise([filtered], estimator="kalibr", vibration={"gyro_x": shaking})
+    extra = noise.channels["gyro_x"].items["vibration"][0]
+    assert extra.value == pytest.approx(math.sqrt(3) * N_GYRO_RAD, rel=0.05)
+    assert "output_filter's gain" in extra.how
     with pytest.raises(InputError, match="gyro_y is not among"):
         bc.filter_noise([gyro], estimator="kalibr", vibration={"gyro_y": shaking})
 
@@ -227,6 +280,11 @@ def test_export_filter_command(run_cli, tmp_path):
         "--terms", "white,rrw", "--horizon", "300", "--out", out, "--json", document, "--quiet",
     )  # fmt: skip
     assert code == 0, stderr
+    for wrong in ("gnss:1@1", "position:1", "position:-1@1"):
+        code, _, stderr = run_cli(
+            "export-filter", csv, "--estimator", "kalibr", "--aiding", wrong, "--out", out,
+        )  # fmt: skip
+        assert code == 2 and "--aiding" in stderr and "Traceback" not in stderr
     written = yaml.safe_load(out.read_text())
     result = json.loads(document.read_text())
     for key in ("gyroscope_noise_density", "accelerometer_random_walk"):

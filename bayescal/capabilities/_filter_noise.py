@@ -12,10 +12,18 @@ Contributions ("items"), each a continuous-time density in SI units, added in qu
 ``bias_instability``
     Every fitted term that moves the bias without being a random walk (bias instability,
     Gauss-Markov, a ramp: :func:`~bayescal.models._terms.bias_terms`) as the random walk that
-    stands for it over the ``horizon`` (:func:`~bayescal.models._terms.bounding_walk_variance`:
+    stands for it over the horizon H (:func:`~bayescal.models._terms.bounding_walk_variance`:
     q^2 = 9 sigma_A^2(H / 3) / H, for flicker 9 (2 ln 2 / pi) B^2 / H), at the term's upper
     quantile over the draws. A filter whose bias walk is K alone believes a flicker-dominated
     bias is constant (Kalibr issue 345).
+
+The horizon is the filter's: the time over which its estimate of the bias averages. Given
+(``horizon``, a sliding window's length), it serves every channel; otherwise each channel's
+follows from the filter's aiding (``aiding``, :class:`~bayescal.Aiding`; by default
+:data:`DEFAULT_AIDING`, position fixes of 1 m every second) and the sensor's own bias: the
+span over which the aiding reveals a bias as large as the bias wanders
+(:func:`~bayescal.navigation._aiding.aided_horizon`), so that a smaller bias is bounded over a
+longer span.
 ``vibration``
     From a second recording with the motors running: the extra two-sided density in the
     filter's band, mean over (0, f/2] of the vibration record's Welch spectrum less N^2,
@@ -42,12 +50,14 @@ import numpy as np
 
 from .._errors import HealthCheckError, InputError
 from ..models._terms import (
+    BOUNDING_FRACTION,
     FILTER_SHAPE_OF_TERM,
     PARAMETERS_OF_TERM,
     TERMS,
     bias_terms,
     bounding_walk_variance,
 )
+from ..navigation._aiding import Aiding, aided_horizon
 from ..recording._inputs import channel_input
 from ..recording._units import parse_unit
 from ._estimators import SENSORS, SI, Estimator, sensor_of_unit
@@ -58,6 +68,12 @@ QUANTILE = 0.95
 """The posterior's upper quantile the exported N and K are read at."""
 ITEMS = ("posterior_quantile", "bias_instability", "vibration", "thermal")
 """The contributions of an exported number, in order."""
+MIN_GAIN = 0.25
+"""A vibration record's density is read where the fitted output filter keeps at least this
+share of the power (dividing by a smaller gain would amplify its noise)."""
+DEFAULT_AIDING = Aiding("position", 1.0, 1.0)
+"""The aiding assumed when neither a horizon nor an aiding is given: GNSS-class position
+fixes, 1 m sd every second."""
 
 
 @dataclass(frozen=True)
@@ -82,6 +98,8 @@ class ChannelNoise:
     source: str
     rate_hz: float
     """The recording's rate, Hz."""
+    horizon_s: float
+    """The horizon its bias terms and thermal change are bounded over, s."""
     items: dict
     """Item name (:data:`ITEMS`) -> tuple of :class:`Item` (empty when it does not apply)."""
     missing: dict
@@ -99,8 +117,10 @@ class FilterNoise:
 
     estimator: Estimator
     """The estimator's convention (:mod:`bayescal.capabilities._estimators`)."""
-    horizon_s: float
-    """The horizon the bias terms are bounded over, s."""
+    horizon_s: float | None
+    """The horizon given, s; None when each channel's follows from :attr:`aiding`."""
+    aiding: Aiding | None
+    """The aiding the channels' horizons follow from; None when a horizon was given."""
     quantile: float
     """The posterior's upper quantile the items are read at."""
     filter_rate_hz: float
@@ -162,6 +182,7 @@ class FilterNoise:
                     }
                     for p in ("N", "K")
                 },
+                "horizon_s": channel.horizon_s,
                 "items": items,
                 "density": {
                     p: {"value": v, "unit": _density_unit(channel.sensor, p)}
@@ -271,7 +292,17 @@ def _vibration_item(fit: NoiseFit, vibration, si: float, sensor: str, rate_hz: f
         values, fs=data.rate_hz, nperseg=min(values.size, 4096), detrend="linear"
     )
     band = (frequency > 0) & (frequency <= min(rate_hz, data.rate_hz) / 2)
-    level = float(np.mean(one_sided[band])) / 2  # two-sided, as N^2
+    density = one_sided / 2  # two-sided, as N^2
+    shape = _filter_shape(fit)
+    through = ""
+    if shape is not None and data.rate_hz == fit.rate_hz:
+        # The vibration passes the sensor's output filter as the static noise does: compare
+        # the densities before it, where the filter keeps enough of the band to divide by.
+        gain = np.asarray(_filter_gain(fit, shape, frequency / fit.rate_hz))
+        band &= gain >= MIN_GAIN
+        density = density / np.where(gain > 0, gain, 1.0)
+        through = f", divided by the fitted {shape}'s gain (where it is >= {MIN_GAIN:g})"
+    level = float(np.mean(density[band]))
     static = (fit.parameters["N"].mean * si) ** 2
     extra = math.sqrt(max(level - static, 0.0))
     return Item(
@@ -279,13 +310,14 @@ def _vibration_item(fit: NoiseFit, vibration, si: float, sensor: str, rate_hz: f
         extra,
         _density_unit(sensor, "N"),
         f"vibration record {data.source} ({data.channel}): its mean two-sided density over "
-        f"(0, {min(rate_hz, data.rate_hz) / 2:g}] Hz, {math.sqrt(level):.3e}, less the static N",
+        f"(0, {min(rate_hz, data.rate_hz) / 2:g}] Hz{through}, {math.sqrt(level):.3e}, less "
+        "the static N",
     )
 
 
-def _thermal_item(fit: NoiseFit, thermal, si: float, sensor: str, horizon: float) -> Item:
-    """The compensated bias's change over a temperature excursion, as a walk over the
-    horizon."""
+def _thermal_change(fit: NoiseFit, thermal) -> tuple[float, str]:
+    """The variance (SI) of the compensated bias's change over the expected temperature
+    excursion, and how it was made."""
     try:
         calibration, excursion = thermal
         excursion = float(excursion)
@@ -301,26 +333,50 @@ def _thermal_item(fit: NoiseFit, thermal, si: float, sensor: str, horizon: float
     powers = excursion ** np.arange(covariance.shape[0], dtype=float)
     powers[0] = 0.0  # the level cancels in a change
     variance = float(powers @ covariance @ powers) * cal_si**2
-    return Item(
-        "K",
-        math.sqrt(variance / horizon),
-        _density_unit(sensor, "K"),
+    sensor, _ = sensor_of_unit(fit.unit, fit.channel, fit.source)
+    how = (
         f"thermal calibration of {calibration.channel}: the compensated bias's sd of change "
         f"over {excursion:g} degC, {math.sqrt(variance):.3e} {SI[sensor]}, as a walk "
-        f"reaching it at the horizon",
+        "reaching it at the horizon"
     )
+    return variance, how
+
+
+def _channel_horizon(
+    fit: NoiseFit, sensor: str, si: float, aiding: Aiding, thermal_variance: float
+) -> float:
+    """The span over which ``aiding`` reveals the channel's bias as well as its bias terms
+    (posterior means) and thermal change wander (:func:`aided_horizon`)."""
+    terms = bias_terms(fit.terms)
+    values = {p: fit.parameters[p].mean for t in terms for p in PARAMETERS_OF_TERM[t]}
+
+    def deviation(tau: float) -> float:
+        variance = sum(float(TERMS[t].allan_variance(tau, values, fit.rate_hz)) for t in terms)
+        return math.sqrt(max(variance, 0.0) * si**2 + thermal_variance)
+
+    return aided_horizon(aiding, sensor, deviation, shortest_s=BOUNDING_FRACTION / fit.rate_hz)
+
+
+def _filter_shape(fit: NoiseFit) -> str | None:
+    """The fitted output filter's term, if the model holds one."""
+    return next((t for t in fit.terms if t in FILTER_SHAPE_OF_TERM), None)
+
+
+def _filter_gain(fit: NoiseFit, shape: str, nu):
+    """The fitted filter's power gain at frequencies ``nu`` (cycles per sample)."""
+    values = {p: fit.parameters[p].mean for p in fit.parameters}
+    return TERMS[shape].gain(nu, values, fit.rate_hz)
 
 
 def _output_filter_note(fit: NoiseFit, estimator: Estimator, rate_hz: float) -> str | None:
     """How much a per-sample sd measured on the stream would understate N sqrt(f)."""
-    shapes = [t for t in fit.terms if t in FILTER_SHAPE_OF_TERM]
-    if not shapes:
+    shape = _filter_shape(fit)
+    if shape is None:
         return None
-    values = {p: fit.parameters[p].mean for p in fit.parameters}
     nu = (np.arange(4096) + 0.5) / 8192
-    kept = float(np.mean(np.asarray(TERMS[shapes[0]].gain(nu, values, fit.rate_hz))))
+    kept = float(np.mean(np.asarray(_filter_gain(fit, shape, nu))))
     return (
-        f"the sensor's output filter ({shapes[0]}) leaves the samples' sd at "
+        f"the sensor's output filter ({shape}) leaves the samples' sd at "
         f"{math.sqrt(kept):.2f} of N sqrt(f): the export uses N, the density the filter keeps "
         "at low frequency"
         + (
@@ -354,7 +410,8 @@ def filter_noise(
     fit,
     *,
     estimator: str,
-    horizon: float = 600.0,
+    horizon: float | None = None,
+    aiding: Aiding | None = None,
     quantile: float = QUANTILE,
     filter_rate_hz: float | None = None,
     vibration: Mapping | None = None,
@@ -371,9 +428,14 @@ def filter_noise(
     estimator : str
         ``kalibr``, ``openvins``, ``orbslam3``, ``vins``, ``gtsam`` or ``px4``
         (:mod:`bayescal.capabilities._estimators` gives each one's convention).
-    horizon : float
+    horizon : float, optional
         Seconds over which the bias terms (instability, Gauss-Markov) are bounded by a
-        random walk: a sliding window's length, or a mission's.
+        random walk, for every channel: the time the filter's bias estimate averages over
+        (a sliding window's length). Not with ``aiding``.
+    aiding : Aiding, optional
+        The filter's aiding (position or velocity fixes, their sd and interval): each
+        channel's horizon is the span over which it reveals that channel's bias (module
+        docstring). Default, when no ``horizon`` is given: :data:`DEFAULT_AIDING`.
     quantile : float
         The posterior's upper quantile N, K and the bias terms are read at, in (0.5, 1).
     filter_rate_hz : float, optional
@@ -395,7 +457,8 @@ def filter_noise(
     Raises
     ------
     InputError
-        An unknown estimator, a horizon or quantile out of range, a channel that is neither
+        An unknown estimator, a horizon or quantile out of range, both a horizon and an
+        aiding, a channel that is neither
         a gyro nor an accelerometer, a vibration or thermal input for an unknown channel.
 
     Examples
@@ -411,8 +474,20 @@ def filter_noise(
     """
     chosen = find_estimator(estimator)
     fits = _fits(fit)
-    if not (isinstance(horizon, (int, float)) and math.isfinite(horizon) and horizon > 0):
-        raise InputError(f"horizon={horizon!r} must be a positive number of seconds")
+    if horizon is not None:
+        if aiding is not None:
+            raise InputError(
+                "horizon and aiding: give one (the horizon, or the aiding it follows from)"
+            )
+        if not (isinstance(horizon, (int, float)) and math.isfinite(horizon) and horizon > 0):
+            raise InputError(f"horizon={horizon!r} must be a positive number of seconds")
+    elif aiding is None:
+        aiding = DEFAULT_AIDING
+    elif not isinstance(aiding, Aiding):
+        raise InputError(
+            f"aiding={aiding!r} must be a bc.Aiding",
+            fix='give e.g. bc.Aiding("position", sd=1.0, interval_s=1.0)',
+        )
     if not 0.5 <= quantile < 1:
         raise InputError(f"quantile={quantile!r} must lie in [0.5, 1)")
     for argument, given in (("vibration", vibration), ("thermal", thermal)):
@@ -429,13 +504,18 @@ def filter_noise(
         if not one.passed:
             failures.append(f"{name}: posterior checks failed: " + "; ".join(one.failures))
         posterior, notes = _posterior_items(one, si, sensor, quantile)
+        change = _thermal_change(one, thermal[name]) if thermal and name in thermal else None
+        span = horizon or _channel_horizon(one, sensor, si, aiding, change[0] if change else 0.0)
         items = {item: () for item in ITEMS}
         items["posterior_quantile"] = tuple(posterior)
-        items["bias_instability"] = tuple(_bias_items(one, si, sensor, quantile, horizon))
+        items["bias_instability"] = tuple(_bias_items(one, si, sensor, quantile, span))
         if vibration and name in vibration:
             items["vibration"] = (_vibration_item(one, vibration[name], si, sensor, rate_hz),)
-        if thermal and name in thermal:
-            items["thermal"] = (_thermal_item(one, thermal[name], si, sensor, horizon),)
+        if change:
+            variance, how = change
+            items["thermal"] = (
+                Item("K", math.sqrt(variance / span), _density_unit(sensor, "K"), how),
+            )
         missing = {
             "posterior_quantile": "",
             "bias_instability": "the fitted model has no bias term beside the random walk "
@@ -457,6 +537,7 @@ def filter_noise(
             sensor,
             one.source,
             one.rate_hz,
+            float(span),
             items,
             missing,
             density,
@@ -483,9 +564,21 @@ def filter_noise(
     notes = []
     if len(rates) > 1 and chosen.per_sample and not (filter_rate_hz or chosen.default_rate_hz):
         notes.append(f"the channels' rates differ ({sorted(rates)} Hz): values per sample at each")
+    if horizon is None:
+        notes.append(
+            f"each channel's horizon follows from the aiding, {aiding.describe()}"
+            + (
+                " (assumed: give the filter's own aiding, or the horizon of a sliding window)"
+                if aiding is DEFAULT_AIDING
+                else ""
+            )
+            + ": "
+            + ", ".join(f"{c.channel} {c.horizon_s:.3g} s" for c in channels.values())
+        )
     return FilterNoise(
         chosen,
-        float(horizon),
+        None if horizon is None else float(horizon),
+        aiding,
         quantile,
         float(rate),
         channels,

@@ -1,6 +1,8 @@
 """``bayescal export-filter``: a navigation filter's IMU noise from a static recording, in the
 named estimator's convention and file, with its JSON."""
 
+import argparse
+
 from ._arguments import (
     add_recording_arguments,
     channel_of,
@@ -17,6 +19,24 @@ from ._arguments import (
 )
 
 
+def aiding(text: str):
+    """``KIND:SD@SECONDS`` -> :class:`~bayescal.Aiding`."""
+    from .._errors import InputError
+    from ..navigation._aiding import Aiding
+
+    kind, _, rest = text.partition(":")
+    sd, _, interval = rest.partition("@")
+    try:
+        return Aiding(kind.strip(), float(sd), float(interval))
+    except InputError as error:
+        raise argparse.ArgumentTypeError(f"{text!r}: {error}") from None
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not KIND:SD@SECONDS, e.g. position:1@1 (m, s) or velocity:0.05@0.1 "
+            "(m/s, s)"
+        ) from None
+
+
 def add_parser(commands) -> None:
     from ..capabilities._estimators import ESTIMATORS
 
@@ -28,20 +48,29 @@ def add_parser(commands) -> None:
         "white noise and bias random walk a navigation filter needs, in the estimator's own "
         "convention (continuous density or per-sample sd, its units and names) and file, "
         "each number itemised: the posterior's upper quantile of N and K, the bias "
-        "instability as the random walk that bounds it over --horizon, and a vibration "
-        "record's extra noise.",
+        "instability as the random walk that bounds it over the filter's horizon (given, or "
+        "following from its aiding), and a vibration record's extra noise.",
     )
     add_recording_arguments(parser, channel="many")
     parser.add_argument(
         "--estimator", required=True, choices=tuple(ESTIMATORS), help="the estimator"
     )
-    parser.add_argument(
+    horizon = parser.add_mutually_exclusive_group()
+    horizon.add_argument(
         "--horizon",
         type=positive_float,
-        default=600.0,
         metavar="SECONDS",
-        help="time over which the bias instability is bounded by a random walk: a sliding "
-        "window's or a mission's length (default 600)",
+        help="time over which the bias instability is bounded by a random walk, for every "
+        "channel: the time the filter's bias estimate averages over (a sliding window's "
+        "length); default: each channel's from --aiding",
+    )
+    horizon.add_argument(
+        "--aiding",
+        type=aiding,
+        metavar="KIND:SD@SECONDS",
+        help="the filter's aiding, e.g. position:1@1 (position fixes of 1 m sd every second) "
+        "or velocity:0.05@0.1 (m/s): each channel's horizon is the span over which it reveals "
+        "that channel's bias (default position:1@1, GNSS-class)",
     )
     parser.add_argument(
         "--vibration",
@@ -106,6 +135,7 @@ def run(args) -> int:
         fits,
         estimator=args.estimator,
         horizon=args.horizon,
+        aiding=args.aiding,
         quantile=args.quantile,
         filter_rate_hz=args.filter_rate,
         vibration=vibration,

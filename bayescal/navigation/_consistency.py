@@ -76,6 +76,16 @@ class Grade:
     accel: dict
     gyro_bias_sd: float
     accel_bias_sd: float
+    vibration: tuple[float, float] = (0.0, 0.0)
+    """The (gyro, accelerometer) white density the vehicle's vibration adds while it moves
+    (SI /sqrt(Hz)): it enters before the sensor's output filter, as the white noise does."""
+
+    def moving(self, axis: int) -> dict:
+        """The NoiseModel parameters of sensor ``axis`` (0-2 gyros, 3-5 accelerometers) on
+        the moving vehicle: its static noise with the vibration's density added."""
+        parameters = self.gyro if axis < 3 else self.accel
+        extra = self.vibration[0 if axis < 3 else 1]
+        return {**parameters, "N": math.hypot(parameters["N"], extra)}
 
 
 def _dynamics(scenario: Scenario):
@@ -215,7 +225,8 @@ def _scores(model: StateSpace, observations, truth):
 
 def simulate_runs(prepared: Setup, grade: Grade, runs: int, seed: int):
     """Truth navigation errors at every fix (runs, J, 7) and the fixes (runs, J, 2), from the
-    IMU of ``grade`` (its NoiseModel per axis plus a turn-on bias)."""
+    IMU of ``grade`` (its NoiseModel per axis on the moving vehicle, :meth:`Grade.moving`,
+    plus a turn-on bias)."""
     scenario = prepared.scenario
     n = scenario.fixes * scenario.steps_per_fix
     rng = np.random.default_rng(seed)
@@ -223,9 +234,8 @@ def simulate_runs(prepared: Setup, grade: Grade, runs: int, seed: int):
     sensor = np.empty((runs, n, 6))
     for run in range(runs):
         for axis in range(6):
-            parameters = grade.gyro if axis < 3 else grade.accel
             turn_on = grade.gyro_bias_sd if axis < 3 else grade.accel_bias_sd
-            model = NoiseModel(rate_hz=scenario.rate_hz, **parameters)
+            model = NoiseModel(rate_hz=scenario.rate_hz, **grade.moving(axis))
             sensor[run, :, axis] = turn_on * rng.standard_normal() + model.simulate(
                 n, keys[6 * run + axis]
             )

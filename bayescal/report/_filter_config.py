@@ -51,8 +51,16 @@ def _explained(noise: FilterNoise, comment: str) -> list[str]:
         "Each density is the root-sum-square of its items (continuous time, SI):",
         f"  posterior_quantile: N and K at the posterior's {100 * noise.quantile:g} % quantile;",
         "  bias_instability: each bias term as the random walk whose Allan variance equals its",
-        f"    own at a third of the horizon H = {noise.horizon_s:g} s, q^2 = 9 sigma_A^2(H/3)/H",
+        "    own at a third of the horizon H, q^2 = 9 sigma_A^2(H/3)/H",
         "    (flicker: 9 (2 ln 2/pi) B^2 / H), added to K;",
+        f"    H = {noise.horizon_s:g} s, given"
+        if noise.horizon_s is not None
+        else f"    H per channel: the span over which the aiding ({noise.aiding.describe()})",
+        *(
+            ()
+            if noise.horizon_s is not None
+            else ("    reveals the channel's bias as well as the bias wanders (see notes);",)
+        ),
         "  vibration: the extra white density of a record with the motors running, added to N;",
         "  thermal: the compensated bias's change over the expected temperature excursion,",
         "    as a walk reaching it at the horizon, added to K.",
@@ -253,6 +261,14 @@ def filter_document(noise: FilterNoise, path: str | None = None) -> dict:
         "convention": noise.estimator.reference,
         "file": path,
         "horizon_s": noise.horizon_s,
+        "aiding": None
+        if noise.aiding is None
+        else {
+            "kind": noise.aiding.kind,
+            "sd": noise.aiding.sd,
+            "unit": noise.aiding.unit,
+            "interval_s": noise.aiding.interval_s,
+        },
         "quantile": noise.quantile,
         "filter_rate_hz": noise.filter_rate_hz,
         "values": noise.values,

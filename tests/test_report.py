@@ -227,6 +227,24 @@ def test_the_channel_tells_one_story_with_its_effect(report):
     assert "contaminated" in text
 
 
+def test_the_page_says_what_to_tell_a_navigation_filter(report):
+    """The accelerometer's N and K as a filter's continuous densities, from its own noise fit
+    (the posterior's 95 % quantile, m/s^2/sqrt(Hz)); the gyro, whose record holds the thermal
+    bias its noise model lacks, withheld and why."""
+    outcome, _ = report
+    document = json.loads(outcome.json.read_text())["navigation_filter"]
+    acc = next(a for a in outcome.analyses if a.channel == "acc_z").noise.noise
+    n_draws = np.ravel(acc.draws["N"])
+    assert document["values"]["accelerometer_noise_density"]["value"] == pytest.approx(
+        float(np.quantile(n_draws, 0.95)), rel=1e-9
+    )
+    assert "gyroscope_noise_density" not in document["values"]
+    assert "thermal_bias" in document["withheld"]["gyro_x"]
+    page = outcome.html.read_text()
+    section = page[page.index("<h2>For your navigation filter</h2>") :]
+    assert "m/s^2/sqrt(Hz)" in section and "export-filter" in section
+
+
 def test_discovery_figures_draw_the_bounds_of_their_checks(report):
     """A point of a discovery's Allan figure lies outside the band it is drawn in exactly
     when the Allan deviation check fails, before and after (the band is the check's own:

@@ -21,11 +21,14 @@ Files (conventions: :mod:`bayescal.capabilities._estimators`):
 """
 
 import json
+from dataclasses import dataclass
 from importlib.metadata import version
 
-from ..capabilities._estimators import PX4_RANGES, SENSORS
-from ..capabilities._filter_noise import ITEMS, FilterNoise
+from .._errors import InputError
+from ..capabilities._estimators import PX4_RANGES, SENSORS, sensor_of_unit
+from ..capabilities._filter_noise import ITEMS, FilterNoise, filter_noise
 from ._export import _number
+from ._format import esc, num
 
 _PLACEHOLDER_TOPIC = "/imu0"
 SCHEMA = "bayescal.filter_noise"
@@ -285,3 +288,112 @@ def filter_text(noise: FilterNoise, path: str) -> str:
     for key, entry in noise.values.items():
         lines.append(f"  {key} = {entry['value']:.4e} {entry['unit']} (from {entry['channel']})")
     return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class ReportFilterNoise:
+    """What the report tells a navigation filter (:func:`report_filter_noise`)."""
+
+    noise: FilterNoise | None
+    """The continuous-time densities of the channels exported (None: none could be)."""
+    withheld: dict
+    """channel -> why it is not exported."""
+
+
+def report_filter_noise(analyses) -> ReportFilterNoise:
+    """The noise a navigation filter should be told from a report's channels (its
+    :class:`~bayescal.report._html.ChannelAnalysis` objects): Kalibr's continuous densities
+    with each channel's horizon from the default aiding. A channel is withheld when it has no
+    posterior, is neither a gyro nor an accelerometer, or when discovery found effects its
+    noise model lacks: its noise model's numbers are then not the ones that hold them."""
+    fits, withheld = [], {}
+    for analysis in analyses:
+        fit = analysis.noise.noise
+        if fit is None:
+            withheld[analysis.channel] = "classical only: no posterior to export"
+            continue
+        try:
+            sensor_of_unit(fit.unit, analysis.channel, fit.source)
+        except InputError:
+            withheld[analysis.channel] = f"its unit, {fit.unit}, is no angular rate or acceleration"
+            continue
+        if analysis.effects is not None:
+            withheld[analysis.channel] = (
+                f"discovery found {' and '.join(analysis.effects.effects)}, which the noise "
+                "model lacks: its N and K are not a filter's until the effect is removed or "
+                "compensated"
+            )
+            continue
+        fits.append(fit)
+    return ReportFilterNoise(filter_noise(fits, estimator="kalibr") if fits else None, withheld)
+
+
+def filter_section(exported: ReportFilterNoise, source: str) -> str:
+    """The report's section "For your navigation filter": per channel N and K (continuous
+    densities, SI) with their items, the values per sensor, what was withheld and the
+    command that writes an estimator's own file."""
+    noise = exported.noise
+    parts = ["<h2>For your navigation filter</h2>"]
+    if noise is not None:
+        parts.append(
+            "<p class='note'>The white noise N and the bias's random walk K a navigation "
+            "filter should be told, as continuous-time densities (what Kalibr, OpenVINS, "
+            "ORB-SLAM3 and GTSAM take), each the root-sum-square of its items: the "
+            f"posterior's {100 * noise.quantile:g} % quantile, and each bias term as the "
+            "random walk that bounds it over the horizon, here the span over which "
+            f"{esc(noise.aiding.describe())} reveal the channel's bias (an assumption: give "
+            "your filter's aiding or window).</p>"
+        )
+        rows = []
+        summary = noise.summary
+        for channel in noise.channels.values():
+            for p in ("N", "K"):
+                items = "; ".join(
+                    f"{esc(item)} {num(part.value, 3)}"
+                    for item in ITEMS
+                    for part in channel.items[item]
+                    if part.parameter == p
+                )
+                rows.append(
+                    f"<tr><td>{esc(channel.channel)}</td><td>{p}</td>"
+                    f"<td>{num(channel.density[p], 4)} "
+                    f"{esc(summary[channel.channel]['density'][p]['unit'])}"
+                    f"</td><td>{items}</td><td>{num(channel.horizon_s, 3)} s</td></tr>"
+                )
+        parts.append(
+            "<table><tr><th>channel</th><th></th><th>density</th><th>items</th>"
+            "<th>horizon</th></tr>" + "".join(rows) + "</table>"
+        )
+        parts.append(
+            "<p>One value per sensor covers its three axes (the largest of its channels): "
+            + "; ".join(
+                f"<code>{esc(key)}</code> = {num(entry['value'], 4)} {esc(entry['unit'])} "
+                f"({esc(entry['channel'])})"
+                for key, entry in noise.values.items()
+            )
+            + ".</p>"
+        )
+        for note in noise.notes:
+            parts.append(f"<p class='note'>{esc(note)}</p>")
+    if exported.withheld:
+        parts.append(
+            "<p class='bad'>Not exported: "
+            + "; ".join(f"<b>{esc(c)}</b>: {esc(why)}" for c, why in exported.withheld.items())
+            + ".</p>"
+        )
+    parts.append(
+        "<p class='note'>Another estimator's file (its own names, units and per-sample "
+        "convention), another aiding or a sliding window's horizon: <code>bayescal "
+        f"export-filter {esc(source)} --estimator vins --aiding position:1@1 --out "
+        "vins_imu.yaml</code> (estimators: kalibr, openvins, orbslam3, vins, gtsam, px4).</p>"
+    )
+    return "\n".join(parts)
+
+
+def report_filter_document(exported: ReportFilterNoise) -> dict:
+    """The report JSON's ``navigation_filter``: the export's document and what was
+    withheld."""
+    return {
+        **(filter_document(exported.noise) if exported.noise is not None else {}),
+        "withheld": dict(exported.withheld),
+    }

@@ -24,6 +24,7 @@ from ..inference._sampler import Sampler
 from ..models._terms import PARAMETERS, card_values, display_values, parameter_unit
 from ._discovery import Findings, discovery_document, discovery_figures
 from ._figures import allan_figure, embedded, pair_figure, spectrum_figure
+from ._filter_config import filter_section, report_filter_document, report_filter_noise
 from ._format import (
     STYLE,
     esc,
@@ -903,6 +904,7 @@ def build_report(
             + "; ".join(f"{esc(k)}: <code>{esc(v)}</code>" for k, v in files.items())
             + "</p>"
         )
+    parts.append(filter_section(report_filter_noise(analyses), source))
     parts.append(_FIGURES_NOTE)
     for analysis in analyses:
         parts.append(_channel_section(analysis, discoveries.get(analysis.channel)))
@@ -975,6 +977,7 @@ def report_document(
         "files": files or {},
         "passed": all(a.passed for a in analyses),
         "channels": channels,
+        "navigation_filter": report_filter_document(report_filter_noise(analyses)),
         "discoveries": {
             channel: discovery_document(findings)
             for channel, findings in (discoveries or {}).items()

@@ -4,7 +4,9 @@ and the bias's walk as bc.filter_noise makes them (the bias instability bounded 
 horizon that follows from the filter's aiding) has the covariance of its errors, one told the
 bare Allan-line values is overconfident."""
 
+import importlib.util
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,7 +16,6 @@ from bayescal.models._noise_model import NoiseModel
 from bayescal.models._terms import TERMS, bounding_walk_variance
 from bayescal.navigation._aiding import Aiding, aided_horizon
 from bayescal.navigation._consistency import (
-    Grade,
     Scenario,
     filter_model,
     nees_band,
@@ -23,15 +24,18 @@ from bayescal.navigation._consistency import (
     simulate_runs,
 )
 
-DEG = math.pi / 180
-G = 9.80665
 RATE = 50.0
-MEMS = Grade(
-    gyro={"N": 0.3 / 60 * DEG, "B": 10 / 3600 * DEG, "K": 2 / 3600 / 60 * DEG},
-    accel={"N": 100e-6 * G, "B": 50e-6 * G, "K": 2e-5},
-    gyro_bias_sd=100 / 3600 * DEG,
-    accel_bias_sd=5e-3,
-)
+
+
+def _benchmark():
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "filter_consistency.py"
+    spec = importlib.util.spec_from_file_location("filter_consistency", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+MEMS = _benchmark().GRADES["MEMS"]  # the benchmark's MEMS unit, its output filter too
 
 
 def _exported(truth: dict, sensor: str, scenario: Scenario) -> tuple[float, float]:

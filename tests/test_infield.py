@@ -349,3 +349,10 @@ def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_lev
     assert len(flights) == 4
     for flight in flights:
         assert found[flight]["mahalanobis2"] < 13.8, (flight, found[flight])
+
+
+def test_a_wander_that_is_not_positive_is_refused(old):
+    park = bc.simulate_park(old, seed=1, duration_s=300.0, rate_hz=5.0)
+    for wander in ((0.0, 20.0), (0.5, -1.0), "x"):
+        with pytest.raises(bc.InputError, match="wander"):
+            bc.infield_update(park.recording, old, latitude=45.0, align=(0, 300), wander=wander)

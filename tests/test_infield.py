@@ -233,6 +233,8 @@ def _temperature_gap(table):
         (None, ("--taxi", "600:700"), "the recording ends at"),
         (None, ("--track-heading", "90"), "without a taxi"),
         (None, ("--drift", "-1"), "--drift '-1'"),
+        (None, ("--wander", "0:20"), "--wander"),
+        (None, ("--wander", "x"), "--wander 'x'"),
         ("other_channels", (), "not of 'gyro_x'"),
     ],
 )

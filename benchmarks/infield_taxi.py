@@ -1,25 +1,38 @@
 """The in-field update with a taxi along a known track over many simulated park + taxi
 scenarios (issue 36): whether the heading error's and the updated coefficients' intervals
-cover, how far the taxi narrows the east bias level, and the ablations.
+cover, how far the taxi narrows the east bias level, the ablations, and what the update buys
+in free inertial navigation.
 
     nice -n 10 python benchmarks/infield_taxi.py [--scenarios 100] [--rate 100] [--seed 0]
+        [--aging 4] [--tactical]
 
 Each scenario: benchmarks/infield_alignment.py's park (navigation grade, 20 minutes, latitude
-45 deg, heading 30 deg, warming 20 -> 38.6 degC, aging 3-5 times the calibration's sd of c0),
-then a taxi of 10 minutes at 10 m/s (bc.Taxi): from rest along 30 deg for 330 s, a 90 deg turn
-at 3 deg/s, 240 s along 120 deg; the vehicle wanders about the centre line (second-order
-Gauss-Markov, sd 0.5 m, time constant 20 s). Three updates per scenario:
+45 deg, heading 30 deg, warming 20 -> 38.6 degC), aged by ``--aging`` times the calibration's
+sd of c0, then a taxi of 10 minutes at 10 m/s (bc.Taxi): from rest along 30 deg for 330 s, a 90
+deg turn at 3 deg/s, 240 s along 120 deg; the vehicle wanders about the centre line
+(second-order Gauss-Markov, sd 0.5 m, time constant 20 s). Four updates per scenario:
 
 - taxi: ``taxi=(1200, end), track_heading=(30, 120)``;
+- not aged: the same, on the scenario drawn with no aging since the calibration;
 - no taxi (ablation): the park alone; the east level should stay at its prior;
 - heading forced to zero (ablation): the park alone with the coarse heading taken as exact
   (its prior sd 1e-9 rad): the east level then looks measured, and its intervals should
   stop covering.
 
-Printed: per run the 90 % coverage of the heading error (at the window's end), of the east and
-north levels and of each horizontal gyro's updated coefficients; the east level's posterior sd
-against the ideal 0.0040 deg/h of ../shared/NAVIGATION.md and against its prior sd; the
-correlation of the heading error with the east level; the time of one update.
+Printed per run: the 90 % coverage of the heading error (at the window's end), of the east and
+north levels and of every gyro's coefficients (the joint posterior's draws,
+``coefficient_draws``: the vertical gyro's stored calibration is kept, its draws are the old one
+and the aging); the east level's posterior sd against the ideal 0.0040 deg/h of
+../shared/NAVIGATION.md and against its prior sd; the heading error's correlation with the east
+level; the time of one update. For the taxi runs also (steps m-q): each gyro's bias error, RMS
+over the calibrated range +-5 degC (15-45 degC), of the old calibration, the Bayesian update
+and the patent's classical pipeline (heading-corrected points, weighted interpolation of old
+and new); the horizontal position error after 1 h of free inertial navigation (parked, and at
+250 m/s turning 90 deg every 15 min; ``InFieldUpdate.position_error``) with the old and the
+updated calibrations, the gyros at the park's mean temperature and at the taxi's end, and how
+often the posterior's predicted 90 % region (chi^2, 2 dof) holds the realised error.
+``--tactical``: gyros of ARW 0.05 deg/sqrt(h) and bias instability 0.05 deg/h, calibrated
+with 10 times the navigation grade's sds.
 """
 
 import argparse
@@ -31,10 +44,35 @@ import numpy as np
 IDEAL_EAST = 0.0040  # deg/h, ../shared/NAVIGATION.md
 GYROS = ("gyro_x", "gyro_y", "gyro_z")
 LEGS = ((30.0, 330.0), (120.0, 240.0))
+RANGE = np.linspace(15.0, 45.0, 61)  # degC: the calibrated 20-40 degC +- 5
+CHI2_2_90 = 4.605  # the 90 % quantile of chi^2 with 2 dof
+FLIGHTS = {"parked": 0.0, "250 m/s": 250.0}  # m/s
+TACTICAL_GYRO = {"N": 0.05 / 60.0, "B": 0.05 / 3600.0}  # deg/s/sqrt(Hz), deg/s
+TACTICAL_SD_FACTOR = 10.0  # the tactical chamber calibration's sds over the navigation grade's
+
+
+def tactical(old) -> dict:
+    """The example calibrations as a tactical-grade IMU's: its noise (TACTICAL_GYRO) and sds
+    TACTICAL_SD_FACTOR times the navigation grade's."""
+    from dataclasses import replace
+
+    units = {"N": "deg/s/sqrt(Hz)", "B": "deg/s"}
+    noise = {
+        key: {"mean": value, "q05": value, "q95": value, "unit": units[key]}
+        for key, value in TACTICAL_GYRO.items()
+    }
+    return {
+        name: replace(
+            calibration,
+            noise={"terms": ["white", "bias_instability"], **noise},
+            covariance=calibration.covariance * TACTICAL_SD_FACTOR**2,
+        )
+        for name, calibration in old.items()
+    }
 
 
 def park_truth(park, rate: float) -> dict:
-    """The true east and north levels (mean over the park, deg/h) and the final heading."""
+    """The true east and north levels (mean over the park, deg/h)."""
     attitude = park.truth["attitude"]
     samples = round(park.truth["park_s"] * rate)
     temperature = park.recording.columns["temperature"][:samples]
@@ -69,47 +107,89 @@ def summarize(park, result, seconds: float, rate: float, final_heading: float) -
     )
     row["correlation"] = heading["correlation_with_east_level"]
     covered = []
-    for name in GYROS[:2]:
-        calibration = result.calibration[name]
+    for name in GYROS:
         true = np.asarray(park.truth["thermal"][name]["coefficients"])
-        low = np.asarray(calibration.bayesian["coefficient_q05"])
-        high = np.asarray(calibration.bayesian["coefficient_q95"])
+        low, high = np.quantile(result.coefficient_draws[name], [0.05, 0.95], axis=0)
         covered.extend(((low <= true) & (true <= high)).tolist())
     row["coefficients"] = covered
     return row
 
 
-def one_scenario(seed: int, old, rate: float) -> dict:
+def payoff(park, result, old) -> dict:
+    """Steps m-q: each gyro's bias error over RANGE (old, Bayesian, classical; RMS, deg/h) and
+    the 1 h horizontal position error (old, updated, m) with the posterior's prediction."""
+    row = {}
+    for name in GYROS:
+        true = park.gyro_bias(name, RANGE)
+        errors = {
+            "old": old[name].bias(RANGE)[0],
+            "bayes": result.calibration[name].bias(RANGE)[0],
+        }
+        classical = result.classical["axes"][name]
+        if "coefficients" in classical:
+            powers = (RANGE[:, None] - old[name].reference) ** np.arange(old[name].degree + 1)
+            errors["classical"] = powers @ classical["coefficients"]
+        row[name] = {k: 3600 * float(np.sqrt(np.mean((v - true) ** 2))) for k, v in errors.items()}
+    park_n = int(np.searchsorted(park.recording.columns["time"], park.truth["park_s"]))
+    record = park.recording.columns["temperature"]
+    for label, temperature in (("park mean", record[:park_n].mean()), ("taxi end", record[-1])):
+        true = np.array([float(park.gyro_bias(name, temperature)) for name in GYROS])
+        used = {
+            "old": np.array([old[name].bias(temperature)[0] for name in GYROS]),
+            "updated": np.array([result.calibration[n].bias(temperature)[0] for n in GYROS]),
+        }
+        for flight, speed in FLIGHTS.items():
+            predicted = result.position_error(temperature, speed=speed)
+            realised = {key: predicted["map"] @ (value - true) for key, value in used.items()}
+            offset = realised["updated"] - predicted["mean"]
+            distance = float(offset @ np.linalg.solve(predicted["covariance"], offset))
+            row[f"{flight} at the {label} temperature"] = {
+                "old": float(np.hypot(*realised["old"])),
+                "updated": float(np.hypot(*realised["updated"])),
+                "sd": predicted["sd"],
+                "mahalanobis2": distance,
+                "covered": distance <= CHI2_2_90,
+            }
+    return row
+
+
+def one_scenario(seed: int, old, rate: float, aging: float, gyro_noise=None) -> dict:
     import bayescal as bc
     from bayescal.navigation import _alignment
 
-    rng = np.random.default_rng(20_000 + seed)
-    aging = rng.uniform(3.0, 5.0)
     taxi = bc.Taxi(legs=LEGS, speed=10.0)
-    park = bc.simulate_park(old, aging=aging, rate_hz=rate, taxi=taxi, seed=seed)
-    park_s = park.truth["park_s"]
-    end = park.recording.columns["time"][-1] + 1 / rate
-    rows = {}
-    runs = {
-        "taxi": ({"taxi": (park_s, end), "track_heading": [h for h, _ in LEGS]}, -1),
-        "no taxi": ({}, round(park_s * rate)),
-        "heading forced to zero": ({}, round(park_s * rate)),
+    parks = {
+        aged: bc.simulate_park(
+            old, aging=aged, rate_hz=rate, taxi=taxi, gyro_noise=gyro_noise, seed=seed
+        )
+        for aged in (aging, 0.0)
     }
-    for name, (extra, last) in runs.items():
-        recording = park.recording
+    park_s = parks[aging].truth["park_s"]
+    end = parks[aging].recording.columns["time"][-1] + 1 / rate
+    taxied = {"taxi": (park_s, end), "track_heading": [h for h, _ in LEGS]}
+    runs = {
+        "taxi": (aging, taxied, -1),
+        "not aged": (0.0, taxied, -1),
+        "no taxi": (aging, {}, round(park_s * rate)),
+        "heading forced to zero": (aging, {}, round(park_s * rate)),
+    }
+    rows = {}
+    for name, (aged, extra, last) in runs.items():
         saved = _alignment.HEADING_PRIOR
         if name == "heading forced to zero":
             _alignment.HEADING_PRIOR = 1e-9
         try:
             started = time.perf_counter()
             result = bc.infield_update(
-                recording, old, latitude=45.0, align=(0, park_s), seed=seed, **extra
+                parks[aged].recording, old, latitude=45.0, align=(0, park_s), seed=seed, **extra
             )
             seconds = time.perf_counter() - started
         finally:
             _alignment.HEADING_PRIOR = saved
-        final = park.truth["trajectory"]["heading"][last]
-        rows[name] = summarize(park, result, seconds, rate, final)
+        final = parks[aged].truth["trajectory"]["heading"][last]
+        rows[name] = summarize(parks[aged], result, seconds, rate, final)
+        if extra:
+            rows[name]["payoff"] = payoff(parks[aged], result, old)
     return rows
 
 
@@ -132,10 +212,12 @@ def report(name: str, rows: list[dict]) -> None:
             line += f"; sd / ideal {IDEAL_EAST:g}: {np.mean(sd) / IDEAL_EAST:.2f}x"
         print(line)
     coefficients = np.array([row["coefficients"] for row in rows], dtype=float)
+    per_gyro = coefficients.reshape(len(rows), len(GYROS), -1)
     print(
-        f"  x and y gyro coefficients: 90 % intervals cover {100 * coefficients.mean():.1f} % "
-        f"({coefficients.size} intervals; per coefficient "
-        f"{', '.join(f'{100 * c:.0f}' for c in coefficients.mean(axis=0))} %)"
+        f"  coefficients: 90 % intervals cover {100 * coefficients.mean():.1f} % "
+        f"({coefficients.size} intervals; per gyro "
+        f"{', '.join(f'{g[-1]} {100 * per_gyro[:, i].mean():.0f}' for i, g in enumerate(GYROS))}"
+        f" %; per coefficient {', '.join(f'{100 * c:.0f}' for c in coefficients.mean(axis=0))} %)"
     )
     correlation = np.array([row["correlation"] for row in rows])
     seconds = np.array([row["seconds"] for row in rows])
@@ -143,6 +225,36 @@ def report(name: str, rows: list[dict]) -> None:
         f"  heading-east level correlation: mean {correlation.mean():+.2f}; one update "
         f"median {np.median(seconds):.1f} s, max {seconds.max():.1f} s"
     )
+    if "payoff" in rows[0]:
+        report_payoff([row["payoff"] for row in rows])
+
+
+def report_payoff(rows: list[dict]) -> None:
+    for name in GYROS:
+        errors = {k: np.array([row[name][k] for row in rows]) for k in rows[0][name]}
+        rms = {k: float(np.sqrt(np.mean(v**2))) for k, v in errors.items()}
+        line = (
+            f"  {name} bias RMS error over 15-45 degC: old {rms['old']:.3g}, updated "
+            f"{rms['bayes']:.3g} deg/h (updated / old {rms['bayes'] / rms['old']:.2f}; per "
+            f"scenario median {np.median(errors['bayes'] / errors['old']):.2f})"
+        )
+        if "classical" in rms:
+            line += (
+                f"; classical {rms['classical']:.3g} deg/h "
+                f"({rms['classical'] / rms['old']:.2f} of old)"
+            )
+        print(line)
+    for flight in (key for key in rows[0] if key not in GYROS):
+        old, new, sd = (
+            np.array([row[flight][k] for row in rows]) for k in ("old", "updated", "sd")
+        )
+        covered = np.mean([row[flight]["covered"] for row in rows])
+        print(
+            f"  1 h free inertial, {flight}: horizontal error median old {np.median(old):.0f} m, "
+            f"updated {np.median(new):.0f} m ({100 * (1 - np.median(new) / np.median(old)):.0f} "
+            f"% below); predicted sd median {np.median(sd):.0f} m; its 90 % region holds the "
+            f"realised error in {100 * covered:.0f} %"
+        )
 
 
 def main() -> None:
@@ -151,13 +263,19 @@ def main() -> None:
     parser.add_argument("--rate", type=float, default=100.0, help="the IMU's rate, Hz")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--every", type=int, default=10, help="report every this many")
+    parser.add_argument("--aging", type=float, default=4.0, help="in the old sd of c0")
+    parser.add_argument("--tactical", action="store_true", help="ARW 0.05 deg/sqrt(h) gyros")
     args = parser.parse_args()
     from bayescal.capabilities._examples import example_gyro_calibrations
 
     old = example_gyro_calibrations()
+    noise = None
+    if args.tactical:
+        old, noise = tactical(old), TACTICAL_GYRO
     results: dict[str, list] = {}
     for index in range(args.scenarios):
-        for name, row in one_scenario(args.seed + index, old, args.rate).items():
+        rows = one_scenario(args.seed + index, old, args.rate, args.aging, noise)
+        for name, row in rows.items():
             results.setdefault(name, []).append(row)
         if (index + 1) % args.every == 0 or index + 1 == args.scenarios:
             print(f"... {index + 1} scenarios", flush=True)

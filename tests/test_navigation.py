@@ -412,3 +412,42 @@ def test_the_taxi_readings_mechanize_back_into_the_taxi_and_the_wander_stays_bou
     assert abs(np.linalg.norm(np.radians(rates[0])) - EARTH_RATE) < 1e-10
     error = (columns["gnss_latitude"] - trajectory["latitude"][:-1]) * 111e3
     assert 1.0 < error.std() < 3.0
+
+
+def test_a_balanced_east_residual_costs_nothing_parked_and_shows_in_flight():
+    """The free-inertial check's map (steps p-q): after a gyrocompass alignment an east-only
+    residual of 0.01 deg/h is balanced by the heading it causes, so parked for 1 h it moves
+    the position by under 1 m, while at 250 m/s with 90 deg turns it costs hundreds of metres
+    (the heading error turns the velocity: 0.94 mrad at 250 m/s is 0.23 m/s); a north-only
+    residual of the same size costs about a kilometre parked (NAVIGATION.md: about 1.35 km
+    for 0.01 deg/h of level residual)."""
+    from bayescal.navigation._free_inertial import position_error_map
+
+    attitude = np.asarray(dcm_from_euler(*np.radians([0.5, -0.8, 30.0])))
+    size = math.radians(0.01) / 3600
+    east, north = attitude.T @ [0.0, size, 0.0], attitude.T @ [size, 0.0, 0.0]
+    parked = position_error_map(45.0, attitude)
+    flying = position_error_map(45.0, attitude, speed=250.0)
+    assert np.hypot(*(parked @ east)) < 1.0
+    assert np.hypot(*(flying @ east)) > 300.0
+    assert 500.0 < np.hypot(*(parked @ north)) < 2000.0
+
+
+def test_the_classical_interpolation_weighs_old_and_new_by_their_covariances():
+    """Step o, classically: points on a polynomial with tiny sds give that polynomial; points
+    with huge sds leave the old one; equal information lands half-way. Steps m-n take the
+    heading error's Earth-rate equivalent off each east point."""
+    from bayescal.navigation._tilt_rates import heading_corrected, interpolate_calibration
+
+    temperature = np.linspace(20.0, 38.0, 10)
+    new = np.array([1.0, 0.1])
+    bias = new[0] + new[1] * (temperature - 30.0)
+    old, covariance = np.array([0.0, 0.0]), np.diag([1.0, 0.01])
+    tight, _ = interpolate_calibration(temperature, bias, np.full(10, 1e-6), old, covariance, 30.0)
+    np.testing.assert_allclose(tight, new, atol=1e-8)
+    loose, _ = interpolate_calibration(temperature, bias, np.full(10, 1e6), old, covariance, 30.0)
+    np.testing.assert_allclose(loose, old, atol=1e-8)
+    one, one_covariance = interpolate_calibration([30.0], [2.0], [1.0], [0.0], [[1.0]], 30.0)
+    np.testing.assert_allclose([one[0], one_covariance[0, 0]], [1.0, 0.5])
+    row = heading_corrected([{"east_less_heading": 0.0}], 1e-3, math.radians(45.0))[0]
+    assert row["east"] == pytest.approx(-EARTH_RATE * math.cos(math.radians(45.0)) * 1e-3)

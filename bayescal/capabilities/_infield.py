@@ -24,6 +24,7 @@ from .._output import to_jsonable
 from ..classical._gravity import normal_gravity
 from ..inference._infield import sample_alignment
 from ..inference._sampler import Sampler, sampler_of
+from ..inference._thermal_posterior import central_gaussian
 from ..navigation._alignment import (
     DRIFT_PRIOR_SCALE,
     find_motion,
@@ -32,13 +33,15 @@ from ..navigation._alignment import (
 from ..navigation._alignment import heading_sensitivity as _heading_row
 from ..navigation._earth import check_latitude
 from ..navigation._error_model import TILT
-from ..navigation._frames import euler_from_dcm
+from ..navigation._frames import dcm_from_euler, euler_from_dcm
+from ..navigation._free_inertial import FLIGHT_S, position_error_map
 from ..navigation._simulate import ACCELEROMETERS, GYROS
-from ..navigation._taxi import TaxiReference
+from ..navigation._taxi import WANDER_SD, WANDER_TIME_S, TaxiReference
 from ..recording._recording import Recording, load_recording
 from ..recording._units import parse_unit
 from ._infield_inputs import (
     alignment_window,
+    check_wander,
     gyro_priors,
     old_calibrations,
     read_alignment,
@@ -108,6 +111,11 @@ class InFieldUpdate:
         What the run noticed (temperatures outside the calibrated range, ...).
     posterior : object
         The draws behind it (the drift scale and every state at the alignment's end).
+    coefficient_draws : dict
+        Channel -> the joint posterior's draws of its polynomial's coefficients (draws,
+        degree + 1), the calibrations' units: the vertical gyro's are its old calibration and
+        the aging (the alignment barely informs them), and the draws keep the correlations
+        between the gyros that the per-gyro calibrations drop.
     """
 
     calibration: dict
@@ -122,6 +130,7 @@ class InFieldUpdate:
     taxi: dict | None = None
     notes: tuple[str, ...] = ()
     posterior: object = field(default=None, compare=False, repr=False)
+    coefficient_draws: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def passed(self) -> bool:
@@ -144,6 +153,73 @@ class InFieldUpdate:
         if not self.passed:
             raise HealthCheckError("in-field update: " + "; ".join(self.checks["failures"]))
         return self
+
+    def position_error(
+        self, temperature, *, speed: float = 0.0, duration_s: float = FLIGHT_S
+    ) -> dict:
+        """The horizontal position error the updated calibrations leave after free inertial
+        navigation (steps p-q of the claim: the gyros compensated at their temperature), as
+        the posterior predicts it.
+
+        The next mission aligns where this one parked (gyrocompassed and levelled), then
+        navigates for ``duration_s``, parked or at ``speed`` turning 90 deg every 15 min
+        (:func:`~bayescal.navigation._free_inertial.position_error_map`, the phi-angle error
+        model of Titterton & Weston 2004 ch. 12). The error is linear in the gyros' residual
+        biases (calibration minus truth), so each joint posterior draw of the three
+        polynomials gives one draw of it; its Gaussian is the draws' bulk
+        (:func:`~bayescal.inference._thermal_posterior.central_gaussian`).
+
+        Parameters
+        ----------
+        temperature : float or sequence of float
+            The gyros' temperature in flight, the calibrations' temperature unit: one for all
+            three or one each.
+        speed : float
+            Ground speed, m/s (0: parked).
+        duration_s : float
+            How long it navigates, s.
+
+        Returns
+        -------
+        dict
+            ``mean`` and ``covariance`` of the (north, east) error (m, m^2), ``sd`` (the root
+            of the covariance's trace, m: the horizontal error's rms spread) and ``map`` (the
+            (2, 3) matrix from the body gyros' residuals, m per calibration unit).
+
+        Examples
+        --------
+        >>> update.position_error(38.6, speed=250.0)["sd"]  # m  # doctest: +SKIP
+        310.0
+        """
+        temperature = np.broadcast_to(np.asarray(temperature, dtype=float), (3,))
+        first = next(iter(self.calibration.values()))
+        si = parse_unit(first.unit).to_si
+        attitude = dcm_from_euler(*np.radians(list(self.alignment["park_attitude_deg"].values())))
+        mapping = position_error_map(
+            self.alignment["latitude_deg"],
+            np.asarray(attitude),
+            speed=speed,
+            duration_s=duration_s,
+            height=self.alignment["height_m"],
+        )
+        residuals = []
+        for axis, (name, calibration) in enumerate(self.calibration.items()):
+            powers = (temperature[axis] - calibration.reference) ** np.arange(
+                calibration.degree + 1
+            )
+            used = calibration.bias(temperature[axis])[0]
+            residuals.append(used - self.coefficient_draws[name] @ powers)
+        errors = si * np.stack(residuals, axis=1) @ mapping.T
+        mean, covariance = central_gaussian(errors)
+        return {
+            "mean": mean,
+            "covariance": covariance,
+            "sd": float(np.sqrt(np.trace(covariance))),
+            "unit": "m",
+            "map": mapping * si,
+            "speed_m_s": speed,
+            "duration_s": duration_s,
+        }
 
     def save(self, path):
         """Write the calibrations (every gyro's, updated or not) as one file.
@@ -208,6 +284,7 @@ def infield_update(
     align: tuple[float, float],
     taxi: tuple[float, float] | None = None,
     track_heading=None,
+    wander: tuple[float, float] = (WANDER_SD, WANDER_TIME_S),
     seed: int = 0,
     drift: float | str = "auto",
     gyro_columns=GYROS,
@@ -245,6 +322,11 @@ def infield_update(
         The taxiway's known track heading, deg from north: one, or one per straight leg
         (``"120,210"`` as a string too). Without it the taxi tells nothing about the heading
         (a note says so) and the east level stays at its prior.
+    wander : (float, float)
+        The vehicle's wander about the taxiway's centre line: its sd (m) and time constant
+        (s) (a second-order Gauss-Markov process, :mod:`bayescal.navigation._taxi`). It sets
+        how well the taxi tells the heading: over simulated 10-minute taxis at 10 m/s the east
+        level's sd is about 0.0065 deg/h at 0.5 m (the default), 0.004 deg/h at 0.05 m.
     seed : int
         Seed of the sampler: the same inputs and seed give the same result.
     drift : float or "auto"
@@ -279,7 +361,8 @@ def infield_update(
     InputError
         Motion in the alignment window (where), a missing temperature, a latitude out of
         range, a window too short, a calibration of other channels or units, a taxi window
-        before the park's end or past the record, a track heading without a taxi.
+        before the park's end or past the record, a track heading without a taxi, a wander
+        whose sd or time constant is not positive.
 
     Examples
     --------
@@ -296,6 +379,7 @@ def infield_update(
     latitude = check_latitude(latitude)
     window = alignment_window(align)
     taxi_window, headings = taxi_reference(taxi, track_heading, window)
+    wander_sd, wander_time_s = check_wander(wander)
     if drift != "auto" and not (isinstance(drift, (int, float)) and 0 <= drift < math.inf):
         raise InputError(
             f"drift {drift!r}", fix="give auto, 0 (no aging) or a positive scale in the gyros' unit"
@@ -327,7 +411,12 @@ def infield_update(
     reference = None
     if taxi_window is not None and headings:
         start = round((taxi_window[0] - window[0]) * first.rate_hz)
-        reference = TaxiReference(start_sample=start, headings_deg=headings)
+        reference = TaxiReference(
+            start_sample=start,
+            headings_deg=headings,
+            wander_sd=wander_sd,
+            wander_time_s=wander_time_s,
+        )
     alignment = fine_alignment(
         compensated,
         accel,
@@ -395,7 +484,7 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
             f"99.9 % chi^2 limit {innovations['upper_limit']:.4g}: the vehicle swayed or moved, "
             "or the noise is larger than the model holds"
         )
-    coarse, final = (
+    coarse, final, park_attitude = (
         dict(
             zip(
                 ("roll", "pitch", "heading"),
@@ -403,12 +492,19 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
                 strict=True,
             )
         )
-        for c in (alignment.coarse_attitude, final_attitude)
+        for c in (alignment.coarse_attitude, final_attitude, attitude)
     )
     notes = calibration_notes(old, heat, axes, posterior.drift, context)
     if taxi is not None and not told:
         notes.append(taxi["why"])
     east, east_old = projection(alignment.layout, priors, old, park_heat, attitude, 1, "level")
+    park_heading = None
+    if told:
+        # The patent's heading error: the smoother's at the park's end, one constant for the
+        # park's points (steps m-n).
+        means, _ = alignment.model.smooth(posterior.filtered)
+        state = np.asarray(means[alignment.park_steps - 1]) * np.asarray(alignment.model.scale)
+        park_heading = float(state[TILT] @ _heading_row(attitude))
     correlation = float(np.corrcoef(heading, posterior.states @ east + east_old)[0, 1])
     return InFieldUpdate(
         calibration=new,
@@ -419,7 +515,9 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
             "when there is one)",
         },
         points=points(alignment, old, park_heat, posterior, si),
-        classical=classical(alignment, old, park_heat, attitude, latitude, gravity, si),
+        classical=classical(
+            alignment, old, park_heat, attitude, latitude, gravity, si, axes, park_heading
+        ),
         checks={
             "passed": not failures,
             "failures": failures,
@@ -436,6 +534,7 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
             "height_m": context["height"],
             "coarse_attitude_deg": coarse,
             "final_attitude_deg": final,
+            "park_attitude_deg": park_attitude,
             "gyro_white_noise": {
                 "value": (alignment.noise["gyro"] / math.radians(1) * 60).tolist(),
                 "unit": "deg/sqrt(h)",
@@ -449,4 +548,9 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
         taxi=taxi,
         notes=tuple(notes),
         posterior=posterior,
+        coefficient_draws={
+            name: calibration.coefficients
+            + posterior.states[:, alignment.layout.coefficients[axis]] / si
+            for axis, (name, calibration) in enumerate(old.items())
+        },
     )

@@ -78,6 +78,21 @@ def taxi_reference(taxi, track_heading, window) -> tuple[tuple[float, float] | N
     return (start, stop), headings
 
 
+def check_wander(wander) -> tuple[float, float]:
+    """The taxi's wander about the centre line, (sd in m, time constant in s), checked."""
+    try:
+        sd, time_constant = (float(value) for value in wander)
+    except (TypeError, ValueError):
+        sd = time_constant = math.nan
+    if not (0 < sd < math.inf and 0 < time_constant < math.inf):
+        raise InputError(
+            f"wander={wander!r}",
+            fix="give the wander about the centre line as (sd in m, time constant in s), both "
+            "positive, e.g. (0.5, 20)",
+        )
+    return sd, time_constant
+
+
 def _temperature_columns(recording: Recording, temperature) -> list[str]:
     if temperature is None or (isinstance(temperature, str) and "," not in temperature):
         return [find_temperature_column(recording, temperature)] * 3

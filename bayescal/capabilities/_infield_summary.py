@@ -10,8 +10,14 @@ from dataclasses import replace
 import numpy as np
 
 from .._output import to_jsonable
+from ..inference._thermal_posterior import central_gaussian
 from ..navigation._alignment import mixture_moments
-from ..navigation._tilt_rates import blocks, tilt_rate_points
+from ..navigation._tilt_rates import (
+    blocks,
+    heading_corrected,
+    interpolate_calibration,
+    tilt_rate_points,
+)
 from ..recording._units import parse_unit
 from ._thermal import provenance_step
 
@@ -124,31 +130,48 @@ def points(alignment, old, heat, posterior, si: float) -> dict:
     return found
 
 
-def classical(alignment, old, heat, attitude, latitude, gravity: float, si: float) -> dict:
-    """The patent's tilt rates block by block (:mod:`bayescal.navigation._tilt_rates`), as
-    north and east points and as each gyro's points (its vertical part from the old
-    calibration)."""
+def classical(alignment, old, heat, attitude, latitude, gravity: float, si: float, axes, heading):
+    """The patent's pipeline, classically: the tilt rates block by block
+    (:mod:`bayescal.navigation._tilt_rates`) as north and east points, the east ones with the
+    heading error's Earth-rate equivalent taken off (steps m-n: ``heading``, computed minus true
+    at the park's end, rad, the taxi's estimate; None when no taxi told it, and nothing is taken
+    off), as each gyro's points (its vertical part from the old calibration), and each
+    horizontal gyro's old and new calibration interpolated by their weights (step o)."""
     park = alignment.park_steps
     rows = tilt_rate_points(
         alignment.times[:park], alignment.trajectory.velocity[:park, :2], latitude, gravity
     )
-    axes = {}
+    rows = heading_corrected(rows, 0.0 if heading is None else heading, latitude)
+    found = {}
     for axis, (name, calibration) in enumerate(old.items()):
         points = []
         for row in rows:
             k = int(np.argmin(np.abs(alignment.times - row["time_s"])))
             temperature = float(heat[min(k * alignment.step_samples, heat.shape[0] - 1), axis])
-            change = attitude[0, axis] * row["north"] + attitude[1, axis] * row["east_less_heading"]
+            north = attitude[0, axis] * row["north"]
             sd = math.hypot(attitude[0, axis] * row["north_sd"], attitude[1, axis] * row["east_sd"])
             points.append(
                 {
                     "time_s": row["time_s"],
                     "temperature": temperature,
-                    "bias": float(calibration.bias(temperature)[0]) + change / si,
+                    "bias_before_heading": float(calibration.bias(temperature)[0])
+                    + (north + attitude[1, axis] * row["east_less_heading"]) / si,
+                    "bias": float(calibration.bias(temperature)[0])
+                    + (north + attitude[1, axis] * row["east"]) / si,
                     "sd": sd / si,
                 }
             )
-        axes[name] = {"points": points, "unit": calibration.unit}
+        found[name] = {"points": points, "unit": calibration.unit}
+        if axes[name]["informed_by_alignment"]:
+            coefficients, covariance = interpolate_calibration(
+                [p["temperature"] for p in points],
+                [p["bias"] for p in points],
+                [p["sd"] for p in points],
+                calibration.coefficients,
+                calibration.covariance,
+                calibration.reference,
+            )
+            found[name] |= {"coefficients": coefficients, "covariance": covariance}
     blocks_deg_h = [
         {
             key: value / DEG_PER_HOUR if key not in ("time_s",) else value
@@ -158,22 +181,34 @@ def classical(alignment, old, heat, attitude, latitude, gravity: float, si: floa
     ]
     return {
         "method": "tilt rates from the curvature of the velocity error, block by block "
-        "(quadratic least squares, residuals taken as independent); the east points include "
-        "the heading error's Earth-rate equivalent, the vertical part is the old calibration's",
+        "(quadratic least squares, residuals taken as independent); the east points less the "
+        "heading error's Earth-rate equivalent (the taxi's heading, taken as exact"
+        + ("" if heading is not None else "; no taxi told it: nothing taken off")
+        + "), the vertical part the old calibration's; each horizontal gyro's points fitted by "
+        "weighted least squares and interpolated with the old calibration by their inverse "
+        "covariances, with no aging allowed since it",
+        "heading_error_deg": None if heading is None else math.degrees(heading),
         "blocks": blocks_deg_h,
         "block_unit": "deg/h",
-        "axes": axes,
+        "axes": found,
     }
 
 
 def updated(calibration, draws, si: float, heat, step: dict, sampler: dict, drift: dict):
-    """``calibration`` with its coefficients' posterior from the alignment."""
+    """``calibration`` with its coefficients' posterior from the alignment: the draws' mean and
+    covariance when the aging scale was given (one Gaussian), the Gaussian of their bulk
+    (:func:`~bayescal.inference._thermal_posterior.central_gaussian`) when it was learned (a
+    scale mixture over s whose tail is the drift prior's), as the thermal update does."""
     coefficients = calibration.coefficients + draws / si
+    if drift["learned"]:
+        mean, covariance = central_gaussian(coefficients)
+    else:
+        mean, covariance = coefficients.mean(axis=0), np.cov(coefficients.T)
     low, high = calibration.temperature_range
     return replace(
         calibration,
-        coefficients=coefficients.mean(axis=0),
-        covariance=np.cov(coefficients.T).reshape(calibration.degree + 1, -1),
+        coefficients=mean,
+        covariance=np.reshape(covariance, (calibration.degree + 1, -1)),
         temperature_range=(min(low, float(heat.min())), max(high, float(heat.max()))),
         provenance=(*calibration.provenance, step),
         bayesian=to_jsonable(

@@ -140,6 +140,13 @@ def _add_infield(steps) -> None:
         help="the taxiway's known track heading, deg from north, one per straight leg",
     )
     infield.add_argument(
+        "--wander",
+        metavar="SD:TAU",
+        default="0.5:20",
+        help="the vehicle's wander about the taxiway's centre line: its sd (m) and time "
+        "constant (s) (default 0.5:20)",
+    )
+    infield.add_argument(
         "--accel-unit", metavar="UNIT", help="unit of the accelerometers (default m/s^2)"
     )
     infield.add_argument(
@@ -411,6 +418,14 @@ def _span(text: str, option: str) -> tuple[float, float]:
     return start, stop
 
 
+def _pair(text: str, option: str) -> tuple[float, float]:
+    try:
+        first, second = (float(part) for part in text.split(":"))
+    except ValueError:
+        raise InputError(f"{option} {text!r}", fix="write two numbers as A:B") from None
+    return first, second
+
+
 def _infield_columns(args) -> dict:
     if not args.channels:
         return {}
@@ -450,6 +465,7 @@ def run_infield(args) -> int:
         align=align,
         taxi=taxi,
         track_heading=args.track_heading,
+        wander=_pair(args.wander, "--wander"),
         seed=args.seed,
         drift=drift or 0.0,
         temperature=args.temperature,

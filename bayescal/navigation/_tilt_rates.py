@@ -74,3 +74,32 @@ def tilt_rate_points(times, velocity, latitude: float, gravity: float) -> list[d
             }
         )
     return rows
+
+
+def heading_corrected(rows: list[dict], heading: float, latitude: float) -> list[dict]:
+    """The claim's steps m-n: each block's east point with the heading error's Earth-rate
+    equivalent taken off, eps_E = (eps_E - Omega cos L phi_D) - Omega cos L psi with psi =
+    -phi_D the computed minus true heading (rad, one constant over the park: the taxi's),
+    ``latitude`` in rad; the heading's own uncertainty is not carried (the patent takes it as
+    known)."""
+    shift = EARTH_RATE * math.cos(latitude) * heading
+    return [{**row, "east": row["east_less_heading"] - shift} for row in rows]
+
+
+def interpolate_calibration(
+    temperature, bias, sd, coefficients, covariance, reference: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The claim's step o, classically: the points (``temperature``, ``bias`` with its ``sd``)
+    fitted by weighted least squares with the old polynomial's degree about its ``reference``,
+    and the fit and the old ``coefficients`` (``covariance``) weighted by their inverse
+    covariances (the interpolation of old and new: the Gaussian product, no aging since the
+    old one, each point's sd as independent). Returns the new coefficients and covariance, in
+    the points' unit."""
+    temperature, bias, sd = (np.asarray(x, dtype=float) for x in (temperature, bias, sd))
+    degree = len(coefficients) - 1
+    design = (temperature[:, None] - reference) ** np.arange(degree + 1)
+    weighted = design / sd[:, None]
+    precision = weighted.T @ weighted + np.linalg.inv(covariance)
+    information = weighted.T @ (bias / sd) + np.linalg.solve(covariance, coefficients)
+    new_covariance = np.linalg.inv(precision)
+    return new_covariance @ information, new_covariance

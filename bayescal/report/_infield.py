@@ -48,10 +48,25 @@ def infield_text(document: dict) -> str:
             )
             continue
         lines.append(f"  {name}: updated")
+        classical = document["classical"]["axes"][name]
         for j, (value, sd, unit) in enumerate(
             zip(axis["coefficients"], axis["sd"], axis["coefficient_units"], strict=True)
         ):
-            lines.append(f"    c{j} {value:.6g} +- {sd:.3g} {unit}")
+            lines.append(
+                f"    c{j} {value:.6g} +- {sd:.3g} {unit}   (the patent's pipeline: "
+                f"{classical['coefficients'][j]:.6g} +- "
+                f"{classical['covariance'][j][j] ** 0.5:.3g})"
+            )
+    heading = document["classical"]["heading_error_deg"]
+    lines.append(
+        "  the patent's pipeline: tilt-rate points, "
+        + (
+            f"less the heading error's Earth-rate equivalent ({heading:.4g} deg at the park's end)"
+            if heading is not None
+            else "with no heading error taken off (no taxi told it)"
+        )
+        + ", interpolated with the old calibration by their weights, no aging allowed"
+    )
     drift = document["drift"]
     if drift["learned"]:
         lines.append(

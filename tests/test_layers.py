@@ -22,9 +22,15 @@ LAYERS = (
     "report",
     "cli",
 )
-FOUNDATION = ("bayescal._errors", "bayescal._output", "bayescal._x64", "bayescal")
-"""Imported by every layer: the errors, the atomic writer, JAX's precision, the lazy
-public names."""
+FOUNDATION = (
+    "bayescal._errors",
+    "bayescal._output",
+    "bayescal._caches",
+    "bayescal._x64",
+    "bayescal",
+)
+"""Imported by every layer: the errors, the atomic writer, the compilation caches, JAX's
+precision, the lazy public names."""
 
 
 def module_name(path: Path) -> str:

@@ -26,7 +26,7 @@ def _with_object(vector, holder):
 
 @pytest.fixture
 def folder(tmp_path, monkeypatch):
-    monkeypatch.setenv(_traced.CACHE_VARIABLE, str(tmp_path))
+    monkeypatch.setenv(_traced.TRACE_CACHE, str(tmp_path))
     return tmp_path
 
 
@@ -68,7 +68,7 @@ def test_an_unreadable_entry_is_traced_and_stored_again(folder):
 
 
 def test_without_the_variable_nothing_is_written(tmp_path, monkeypatch):
-    monkeypatch.delenv(_traced.CACHE_VARIABLE, raising=False)
+    monkeypatch.delenv(_traced.TRACE_CACHE, raising=False)
     monkeypatch.chdir(tmp_path)
     assert float(_traced.persistent_jit(_weighted_norm)(np.float64(2.0), np.ones(3), 2.0)) == 6.0
     assert not list(tmp_path.iterdir())

@@ -26,11 +26,12 @@ FOUNDATION = (
     "bayescal._errors",
     "bayescal._output",
     "bayescal._caches",
+    "bayescal._stages",
     "bayescal._x64",
     "bayescal",
 )
-"""Imported by every layer: the errors, the atomic writer, the compilation caches, JAX's
-precision, the lazy public names."""
+"""Imported by every layer: the errors, the atomic writer, the compilation caches, the
+stages' timer, JAX's precision, the lazy public names."""
 
 
 def module_name(path: Path) -> str:

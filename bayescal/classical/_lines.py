@@ -43,6 +43,7 @@ the noise leaves the band out.
 """
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -281,9 +282,11 @@ def _floor(power: np.ndarray, usable: np.ndarray, centre: np.ndarray, guard: np.
         return total / count, count
 
 
+@functools.lru_cache(maxsize=8)
 def _ordinate_correlation(length: int) -> float:
     """The squared correlation of neighbouring ordinates of the tapered periodogram (white
-    increments): |sum h^2 e^{-2 pi i k / M}|^2 / (sum h^2)^2."""
+    increments): |sum h^2 e^{-2 pi i k / M}|^2 / (sum h^2)^2. Kept for the lengths met (a
+    third of a second at 2^20 samples; a notebook fits one record again and again)."""
     taper = tukey_window(length, TAPER_FRACTION)
     squares = taper**2
     shift = np.exp(-2j * np.pi * np.arange(length) / length)

@@ -6,10 +6,13 @@ process (issue 38).
 
 For each size, a static gyro record at 100 Hz (white noise N and a rate random walk K) is
 fitted with the defaults (``bc.fit_noise(y, rate_hz=100.0, seed=1)``: terms chosen by
-evidence, the full posterior) in two fresh processes sharing one empty cache folder
+evidence, the full posterior) in fresh processes sharing one cache folder, empty at the start
 (``XDG_CACHE_HOME``: bayescal's traces and JAX's compilations, :mod:`bayescal._caches`):
 
-- cold: the first process on a machine, which traces and compiles;
+- cold: the first process on a machine (the first size), which traces and compiles;
+- warmed by the sizes before: the first process of a later size, whose bins, padded, are those
+  of the sizes before (2^20 and 2^23 samples: 640): what it still compiles is what depends on
+  the record beyond its bins (the block means of the bias, the checks);
 - warm: a new process after it, as a user's next notebook session is.
 
 Each process times, after its imports, the peer (``_common.allan_wls_fit``: allantools'
@@ -83,14 +86,15 @@ def main() -> None:
         print(json.dumps(child(args.child, args.calls)))
         return
     print(f"bc.fit_noise in one process, imports excluded; {os.cpu_count()} CPU core(s)")
-    for samples in (int(size) for size in args.sizes.split(",")):
-        with tempfile.TemporaryDirectory() as folder:
-            for label in ("cold", "warm"):
+    with tempfile.TemporaryDirectory() as folder:
+        for index, samples in enumerate(int(size) for size in args.sizes.split(",")):
+            first_label = "cold cache" if index == 0 else "cache warmed by the sizes before"
+            for label in (first_label, "warm cache"):
                 result = run(samples, args.calls, Path(folder))
                 first, *later = result["fit_s"]
                 peer = min(result["peer_s"])
                 print(
-                    f"  2^{samples.bit_length() - 1} samples, {label} cache: first call "
+                    f"  2^{samples.bit_length() - 1} samples, {label}: first call "
                     f"{first:.1f} s ({first / peer:.1f}x peer), later calls "
                     f"{', '.join(f'{t:.2f}' for t in later)} s "
                     f"({', '.join(f'{t / peer:.1f}' for t in later)}x peer); peer "

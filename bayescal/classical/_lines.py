@@ -480,6 +480,8 @@ def _joint_covariance(spectrum, nu: np.ndarray, coefficients: np.ndarray) -> np.
     weighted least-squares sandwich (J'WJ)^-1 J'W^2J (J'WJ)^-1 of the Jacobian J of the
     fitted increments (a constant beside them; taken out) — the Cramér-Rao form of the
     frequencies' errors, their neighbours' included."""
+    if nu.size == 0:  # the constant alone: no line's covariance (no pass over the record)
+        return np.zeros((0, 0))
     gram, fourth, _ = _jacobian_sums(spectrum, nu, coefficients)
     inverse = np.linalg.pinv(gram)
     return (inverse @ fourth @ inverse)[1:, 1:]
@@ -547,16 +549,29 @@ class _Spectrum:
         self.tests = self.searched * len(SCALES)
         self.alpha = -math.expm1(math.log1p(-level) / self.tests)
         self.rho2 = _ordinate_correlation(self.size)
+        self._unfitted = self._unfitted_scan = None
 
     def periodogram(self, fitted: np.ndarray) -> np.ndarray:
-        """The periodogram of the increments less ``fitted``."""
-        return increment_periodogram(self.increments - fitted, self.taper)
+        """The periodogram of the increments less ``fitted``. With nothing fitted it is the
+        record's own, kept: the search's first round and the description of a record without
+        lines both read it (an FFT of the whole record each)."""
+        if fitted.any():
+            return increment_periodogram(self.increments - fitted, self.taper)
+        if self._unfitted is None:
+            self._unfitted = increment_periodogram(self.increments, self.taper)
+        return self._unfitted
 
     def scan(self, power: np.ndarray, positions) -> list:
-        """:func:`_scan` of ``power`` with lines at ``positions`` (ordinates)."""
+        """:func:`_scan` of ``power`` with lines at ``positions`` (ordinates); that of the
+        record's own periodogram with no line is kept, as the periodogram is."""
         positions = np.asarray(positions, dtype=float)
+        if power is self._unfitted and positions.size == 0 and self._unfitted_scan is not None:
+            return self._unfitted_scan
         usable = _usable(power.size, self.highest, positions)
-        return _scan(power, usable, self.lowest, self.highest, positions, self.rho2, self.alpha)
+        results = _scan(power, usable, self.lowest, self.highest, positions, self.rho2, self.alpha)
+        if power is self._unfitted and positions.size == 0:
+            self._unfitted_scan = results
+        return results
 
     def fit(self, nu: np.ndarray):
         """(coefficients, fitted increments, covariance per unit spectrum) of lines at

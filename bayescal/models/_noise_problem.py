@@ -190,7 +190,8 @@ class NoiseProblem(eqx.Module):
         record: the spectral summary padded (:func:`~bayescal.models._whittle.
         padded_summary`: the same log density, its pointwise values followed by zeros) and
         the level left out (the bias is drawn apart, given the noise). What the compiled
-        optimiser and sampler take, so that one trace serves every record."""
+        optimiser and sampler take, so that records whose arrays differ only in length share
+        one trace."""
         return NoiseProblem(
             padded_summary(self.spectral), None, self.prior, lsb=self.lsb, mask=self.mask
         )

@@ -39,8 +39,10 @@ Three refinements make it hold on real records of any length:
 The bins grow with the logarithm of the record's length, so every record has a few hundred
 of them; :func:`padded_summary` rounds their number up to a multiple of BIN_BUCKET, and the
 segments' to one of SEGMENT_BUCKET, with padding that weighs exactly zero. The compiled
-likelihood, optimiser and sampler then serve records of every length (and a few gaps) with one
-trace and one compilation, kept on disk between processes (:mod:`bayescal._caches`).
+likelihood, optimiser and sampler then take arrays of one shape for records of many lengths
+(every gap-free one of 2^20 samples and more) and are kept on disk between processes
+(:mod:`bayescal._caches`); what else keys their trace (the components, among them the
+Gauss-Markov term's grid of correlation times over the record's decades) is the model's.
 
 Deterministic terms (a thermal polynomial, a sinusoid, an exponential transient ...) enter as
 regressors x_j with coefficients beta: the periodogram of the increments of y - X beta is a

@@ -10,14 +10,21 @@ default too. Code that wants float32 runs inside ``with jax.enable_x64(False):``
 own computations refuse to run with the mode off (:func:`require_x64`) rather than compute in
 float32. A ``JAX_ENABLE_X64`` environment variable asking for float32 is overridden, with a
 warning.
+
+Loading JAX here also turns on the caches of what bayescal compiles (:mod:`bayescal._caches`),
+before JAX reads its settings.
 """
 
 import os
 import warnings
 
-import jax
+from ._caches import enable_caches
 
-from ._errors import InputError
+enable_caches()
+
+import jax  # noqa: E402  (after the caches' settings, which JAX reads when imported)
+
+from ._errors import InputError  # noqa: E402
 
 if os.environ.get("JAX_ENABLE_X64", "").strip().lower() in ("0", "false", "no", "off"):
     warnings.warn(

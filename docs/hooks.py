@@ -37,7 +37,7 @@ from pathlib import Path
 
 from latex2mathml.converter import convert
 
-from bayescal.cli._main import _enable_compilation_cache
+from bayescal._caches import enable_caches
 
 REPOSITORY = Path(__file__).resolve().parents[1]
 SHARED_DATA = REPOSITORY.parent / "shared" / "data"
@@ -53,7 +53,7 @@ def _needs_shared_data(notebook: Path) -> bool:
 
 
 def on_config(config):
-    _enable_compilation_cache()
+    enable_caches()
     if SHARED_DATA.is_dir():
         return config
     plugin = config.plugins["mkdocs-jupyter"]

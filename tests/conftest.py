@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from bayescal.cli._main import _enable_compilation_cache
+from bayescal._caches import enable_caches
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
 # The caches the command line keeps (JAX's compilations and bayescal's traced optimisers), set
@@ -13,7 +13,7 @@ os.environ.setdefault("JAX_PLATFORMS", "cpu")
 # commands run in-process share what one of them compiled, as a user's runs do. Their keys are
 # the computations themselves, and a cached function gives the same numbers to the last bit
 # (tests/test_traced.py), so sharing them changes no result, only the time.
-_enable_compilation_cache()
+enable_caches()
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 

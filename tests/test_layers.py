@@ -22,9 +22,16 @@ LAYERS = (
     "report",
     "cli",
 )
-FOUNDATION = ("bayescal._errors", "bayescal._output", "bayescal._x64", "bayescal")
-"""Imported by every layer: the errors, the atomic writer, JAX's precision, the lazy
-public names."""
+FOUNDATION = (
+    "bayescal._errors",
+    "bayescal._output",
+    "bayescal._caches",
+    "bayescal._stages",
+    "bayescal._x64",
+    "bayescal",
+)
+"""Imported by every layer: the errors, the atomic writer, the compilation caches, the
+stages' timer, JAX's precision, the lazy public names."""
 
 
 def module_name(path: Path) -> str:

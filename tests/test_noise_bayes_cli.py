@@ -109,6 +109,27 @@ def test_failed_health_check_exits_1_and_says_which(run_cli, tmp_path, white_and
     assert json.loads(output.read_text())["bayesian"]["diagnostics"]["passed"] is False
 
 
+def test_profile_prints_each_stage_on_stderr(run_cli, white_and_walk):
+    code, stdout, stderr = run_cli(
+        "noise", white_and_walk, "--channel", "gyro_z", "--terms", "white,rrw",
+        "--max-steps", "250", "--profile",
+    )  # fmt: skip
+    profile = stderr[stderr.index("profile (s):") :].splitlines()
+    stages = [line.split(maxsplit=1) for line in profile[1:]]
+    names = [name for _, name in stages]
+    assert names[0] == "reading the recording" and names[-1] == "total", names
+    assert "posterior (MAP, emcee, draws)" in names and "writing the outputs" in names
+    assert "classical (bias, Allan deviation with intervals, readings)" in names
+    seconds = {name: float(value) for value, name in stages}
+    inner = (
+        "reading the recording",
+        "writing the outputs",
+        "other (imports, JAX's start-up, the text)",
+    )
+    assert sum(seconds[n] for n in inner) <= seconds["total"] + 0.02
+    assert "profile" not in stdout and code == 1  # 250 steps: the checks fail, as above
+
+
 def test_sensors_lists_the_cards(run_cli):
     code, stdout, _ = run_cli("sensors")
     assert code == 0

@@ -1,6 +1,9 @@
 """The trace cache (bayescal.inference._traced): a traced function stored by one run is
 loaded by the next and computes the same numbers, to the last bit; what cannot be described
-stably is never stored; an unreadable entry is traced again."""
+stably is never stored; an unreadable entry is traced again; a first trace says so beside
+the progress bar; the caches are on for the library by default (bayescal._caches)."""
+
+import os
 
 import jax.numpy as jnp
 import numpy as np
@@ -26,7 +29,7 @@ def _with_object(vector, holder):
 
 @pytest.fixture
 def folder(tmp_path, monkeypatch):
-    monkeypatch.setenv(_traced.CACHE_VARIABLE, str(tmp_path))
+    monkeypatch.setenv(_traced.TRACE_CACHE, str(tmp_path))
     return tmp_path
 
 
@@ -68,7 +71,7 @@ def test_an_unreadable_entry_is_traced_and_stored_again(folder):
 
 
 def test_without_the_variable_nothing_is_written(tmp_path, monkeypatch):
-    monkeypatch.delenv(_traced.CACHE_VARIABLE, raising=False)
+    monkeypatch.delenv(_traced.TRACE_CACHE, raising=False)
     monkeypatch.chdir(tmp_path)
     assert float(_traced.persistent_jit(_weighted_norm)(np.float64(2.0), np.ones(3), 2.0)) == 6.0
     assert not list(tmp_path.iterdir())
@@ -88,3 +91,27 @@ def test_a_function_with_captured_values_is_computed_but_never_stored(folder):
     assert float(cached(power_of(2), np.arange(3.0))) == 5.0
     assert float(cached(power_of(3), np.arange(3.0))) == 9.0
     assert not list(folder.iterdir())
+
+
+def test_a_first_trace_is_announced_once_where_progress_was_asked(folder, capsys):
+    vector = np.arange(3.0)
+    with _traced.announcing(True):
+        _traced.persistent_jit(_weighted_norm)(np.float64(1.0), vector, 1.0)
+        _traced.persistent_jit(_weighted_norm)(np.float64(1.0), vector, 3.0)  # another trace
+    assert capsys.readouterr().err.count("compiling the model's functions") == 1
+    _traced.persistent_jit(_weighted_norm)(np.float64(1.0), vector, 4.0)  # not asked for
+    assert capsys.readouterr().err == ""
+
+
+def test_the_caches_default_to_the_users_cache_folder_and_leave_a_set_variable(
+    tmp_path, monkeypatch
+):
+    from bayescal import _caches
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.delenv(_caches.TRACE_CACHE, raising=False)
+    monkeypatch.setenv("JAX_COMPILATION_CACHE_DIR", str(tmp_path / "elsewhere"))
+    _caches.enable_caches()
+    assert os.environ[_caches.TRACE_CACHE] == str(tmp_path / "bayescal" / "traces")
+    assert os.environ["JAX_COMPILATION_CACHE_DIR"] == str(tmp_path / "elsewhere")
+    assert (tmp_path / "bayescal" / "jax").is_dir()

@@ -11,9 +11,13 @@ from scipy.signal import windows
 import bayescal as bc
 from bayescal.models._components import Components
 from bayescal.models._whittle import (
+    BIN_BUCKET,
+    SEGMENT_BUCKET,
     TAPER_FRACTION,
     _expected_periodogram,
     expected_power,
+    padded_index,
+    padded_summary,
     spectral_summary,
     whittle_log_likelihood,
 )
@@ -159,3 +163,25 @@ def test_flicker_difference_far_from_zero_uses_a_series_that_joins_the_direct_va
     direct = t2_log(t + 2) - 4 * t2_log(t + 1) + 6 * t2_log(t) - 4 * t2_log(t - 1) + t2_log(t - 2)
     flicker = BiasInstability.autocovariance(t.astype(float), RATE) * (2 * np.pi)
     np.testing.assert_allclose(flicker, direct.astype(float), rtol=1e-9)
+
+
+def test_padding_leaves_the_likelihood_and_serves_records_of_many_lengths(record):
+    """The padded summary (bucketed bins and segments) gives the same log-likelihood, its
+    pointwise values those of the summary followed by zeros, with a gap (two segments) too;
+    records of 2^15 and 2^16 samples share its shapes."""
+    with_gap = np.concatenate((record[:20000], [np.nan], record[20001:]))
+    for values in (record, with_gap):
+        summary = summary_of(values)
+        padded = padded_summary(summary)
+        assert padded.n_bins % BIN_BUCKET == 0 and padded.mean_increment.size == SEGMENT_BUCKET
+        for scale in ({}, {"K": 3.0, "N": 0.9}):
+            exact = np.asarray(whittle_log_likelihood(summary, variances(**scale), ramp=1e-4))
+            pointwise = np.asarray(whittle_log_likelihood(padded, variances(**scale), ramp=1e-4))
+            np.testing.assert_allclose(pointwise[padded_index(summary)], exact, rtol=1e-12)
+            assert np.sum(np.abs(np.delete(pointwise, padded_index(summary)))) == 0.0
+    longer = bc.NoiseModel(rate_hz=RATE, bias=0.3, **TRUE).simulate(2**16, seed=1)
+    shapes = {
+        tuple(leaf.shape for leaf in jax.tree_util.tree_leaves(padded_summary(summary_of(v))))
+        for v in (record, longer)
+    }
+    assert len(shapes) == 1

@@ -9,6 +9,7 @@ from functools import cached_property, partial
 import numpy as np
 
 from .._errors import HealthCheckError, InputError
+from .._stages import stage
 from ..classical._noise import ClassicalNoise, classical_noise
 from ..inference._checks import FitCheck, noise_model_checker
 from ..inference._lines_posterior import SpectralLinesFit, lines_posterior
@@ -16,6 +17,7 @@ from ..inference._noise_posterior import NoisePosterior, sample_noise
 from ..inference._priors import card_prior, default_prior
 from ..inference._sampler import Sampler, sampler_of
 from ..inference._selection import MAX_REFUSED, TermSelection, refused_term, select_noise_terms
+from ..inference._traced import announcing
 from ..models._noise_model import NoiseModel
 from ..models._noise_problem import NoiseProblem, noise_summaries
 from ..models._terms import (
@@ -248,56 +250,65 @@ def noise_posterior(
     family = ("white", *CANDIDATE_TERMS) if terms == AUTO else terms
     # Terms found in the record (spectral lines) are taken out before the noise is fitted:
     # the noise model, its checks and N are of what they leave.
-    found = find_in_record(family, values, rate_hz)
+    with stage("spectral lines (periodogram scan)"):
+        found = find_in_record(family, values, rate_hz)
     if any(finding.found for finding in found.values()):
         values = without_found(found, values)
         if level_values is not None and np.shape(level_values) == np.shape(values):
             level_values = without_found(found, level_values)
         allan = None
-    spectral, level = noise_summaries(
-        values, rate_hz, family, level_values, exclude=excluded_bands(found)
-    )
+    with stage("summaries (binned periodogram, block means)"):
+        spectral, level = noise_summaries(
+            values, rate_hz, family, level_values, exclude=excluded_bands(found)
+        )
     checker = _with_what_is_left(noise_model_checker(spectral, values, unit, allan), found)
     selection, refused, chosen = None, {}, terms
 
     def misfit(model) -> str:
         return "; ".join(check.misfit for check in checker(model) if not check.passed)
 
-    while True:
-        if terms == AUTO:
-            # A term whose posterior the sampler could not explore is refused: the search
-            # runs again without it.
-            candidates = tuple(t for t in CANDIDATE_TERMS if t not in refused)
-            selection = select_noise_terms(
-                spectral,
-                level,
-                prior_of,
-                lsb=lsb,
-                misfit=misfit,
-                found=found,
-                candidates=candidates,
-            )
-            chosen = selection.terms
-        problem = NoiseProblem(spectral, level, prior_of(chosen), lsb=np.asarray(lsb))
-        fit = sample_noise(
-            problem,
-            terms=chosen,
-            seed=seed,
-            n_walkers=sampler.n_walkers,
-            max_steps=sampler.max_steps,
-            progress=sampler.progress,
-        )
-        culprit = refused_term(fit, selection) if selection is not None else None
-        if culprit is None or len(refused) == MAX_REFUSED:
-            break
-        refused[culprit.term] = culprit
+    # A first run on a machine traces the optimisers: said beside the progress bar.
+    with announcing(sampler.progress):
+        while True:
+            if terms == AUTO:
+                # A term whose posterior the sampler could not explore is refused: the search
+                # runs again without it.
+                candidates = tuple(t for t in CANDIDATE_TERMS if t not in refused)
+                with stage("term selection (MAP and Laplace evidence per model)"):
+                    selection = select_noise_terms(
+                        spectral,
+                        level,
+                        prior_of,
+                        lsb=lsb,
+                        misfit=misfit,
+                        found=found,
+                        candidates=candidates,
+                    )
+                chosen = selection.terms
+            problem = NoiseProblem(spectral, level, prior_of(chosen), lsb=np.asarray(lsb))
+            with stage("posterior (MAP, emcee, draws)"):
+                fit = sample_noise(
+                    problem,
+                    terms=chosen,
+                    seed=seed,
+                    n_walkers=sampler.n_walkers,
+                    max_steps=sampler.max_steps,
+                    progress=sampler.progress,
+                )
+            culprit = refused_term(fit, selection) if selection is not None else None
+            if culprit is None or len(refused) == MAX_REFUSED:
+                break
+            refused[culprit.term] = culprit
     if refused:
         selection = selection.with_refused(refused)
     terms = chosen
     lines = None
     if SpectralLines.name in found and SpectralLines.name in terms:
-        lines = lines_posterior(found[SpectralLines.name], fit, unit, seed=seed)
-    return NoisePosteriorFit(fit, selection, lsb, tuple(checker(fit.model_at_map())), lines)
+        with stage("spectral lines' posterior"):
+            lines = lines_posterior(found[SpectralLines.name], fit, unit, seed=seed)
+    with stage("fit checks (Allan deviation, spectrum, lag-1)"):
+        checks = tuple(checker(fit.model_at_map()))
+    return NoisePosteriorFit(fit, selection, lsb, checks, lines)
 
 
 def fit_noise(
@@ -382,9 +393,10 @@ def fit_noise(
     values, rate_hz, unit, channel = data.values, data.rate_hz, data.unit, data.channel
     terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
     try:
-        classical = classical_noise(
-            values, rate_hz, confidence=confidence, taus=taus, readings=READINGS
-        )
+        with stage("classical (bias, Allan deviation with intervals, readings)"):
+            classical = classical_noise(
+                values, rate_hz, confidence=confidence, taus=taus, readings=READINGS
+            )
     except InputError as error:
         if data.source == "<array>":
             raise

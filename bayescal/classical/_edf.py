@@ -227,8 +227,16 @@ def equivalent_degrees_of_freedom(
 
 
 def _lag1_autocorrelation(z: np.ndarray) -> float:
-    centred = z - z.mean()
-    return float(np.dot(centred[:-1], centred[1:]) / np.dot(centred, centred))
+    """sum (z_i - m)(z_{i+1} - m) / sum (z_i - m)^2, m the mean, from sums over ``z`` itself
+    in one pass each: no centred copy of a 2^17-point series made at every tau and
+    difference (the series is detrended, or a difference of one, so its mean is near zero
+    and nothing cancels). NumPy's own loop (einsum), not BLAS's dot: handed to BLAS's
+    threads, these short products took 14x longer on a busy 2-core machine (the octave taus
+    of 2^20 samples: 0.68 s against 0.05 s)."""
+    n, mean = z.size, float(z.mean())
+    ends = float(z[0] + z[-1])
+    lagged = np.einsum("i,i->", z[:-1], z[1:]) - mean * (2 * n * mean - ends) + (n - 1) * mean**2
+    return float(lagged / (np.einsum("i,i->", z, z) - n * mean**2))
 
 
 def _detrend(z: np.ndarray, degree: int) -> np.ndarray:

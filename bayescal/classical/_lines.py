@@ -43,11 +43,12 @@ the noise leaves the band out.
 """
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats
+from scipy import special, stats
 
 from ..recording._series import gap_free_runs, is_spooled
 from ._periodogram import (
@@ -281,9 +282,11 @@ def _floor(power: np.ndarray, usable: np.ndarray, centre: np.ndarray, guard: np.
         return total / count, count
 
 
+@functools.lru_cache(maxsize=8)
 def _ordinate_correlation(length: int) -> float:
     """The squared correlation of neighbouring ordinates of the tapered periodogram (white
-    increments): |sum h^2 e^{-2 pi i k / M}|^2 / (sum h^2)^2."""
+    increments): |sum h^2 e^{-2 pi i k / M}|^2 / (sum h^2)^2. Kept for the lengths met (a
+    third of a second at 2^20 samples; a notebook fits one record again and again)."""
     taper = tukey_window(length, TAPER_FRACTION)
     squares = taper**2
     shift = np.exp(-2j * np.pi * np.arange(length) / length)
@@ -313,13 +316,36 @@ def _scan(power, usable, lowest, highest, line_index, rho2, alpha):
         floor, count = _floor(power, usable, centre, GUARD + (width - 1) / 2)
         good = count >= 4
         ratio = np.where(good, sums / (width * np.where(good, floor, 1.0)), 0.0)
-        dof = _scale_dof(width, rho2)
-        log_p = np.where(good, stats.f.logsf(ratio, dof, 2 * np.maximum(count, 1)), 0.0)
+        tested = good
         if line_index.size:  # a line's own ordinate: what a sinusoid leaves there is tested
             distance = np.min(np.abs(centre[:, None] - line_index[None, :]), axis=1)
-            log_p = np.where(distance < 0.5 * width, 0.0, log_p)
+            tested = good & (distance >= 0.5 * width)
+        log_p = _log_p_values(ratio, 2 * np.maximum(count, 1), tested, width, rho2, alpha)
         results.append((width, starts, ratio, log_p, log_p < log_alpha))
     return results
+
+
+def _log_p_values(ratio, denominator_dof, tested, width: int, rho2: float, alpha: float):
+    """log p of each window's ``ratio`` under F(2 w', ``denominator_dof``), 0 where not
+    ``tested``. F's tail (special.fdtrc, about a microsecond each: 12 million windows at 2^23
+    samples) is taken only where it can matter: where p may be below a thousand times
+    ``alpha`` (the ratio above F's quantile there), and at the largest ratio among the windows
+    of each floor count (the smallest p-value of them, which :func:`_largest` reads). Every
+    other window's p-value is above ``alpha``: it is left at 1 (log 0), unread."""
+    dof = _scale_dof(width, rho2)
+    log_p = np.zeros(ratio.size)
+    index = np.flatnonzero(tested)
+    if index.size == 0:
+        return log_p
+    values, dofs = ratio[index], denominator_dof[index]
+    levels, group = np.unique(dofs, return_inverse=True)
+    bound = special.fdtri(dof, levels, 1.0 - min(0.5, 1e3 * alpha))
+    largest = np.full(levels.size, -np.inf)
+    np.maximum.at(largest, group, values)
+    needed = (values >= bound[group]) | (values == largest[group])
+    with np.errstate(divide="ignore"):
+        log_p[index[needed]] = np.log(special.fdtrc(dof, dofs[needed], values[needed]))
+    return log_p
 
 
 def _candidates(results, power, taken) -> list[tuple[int, bool]]:
@@ -454,6 +480,8 @@ def _joint_covariance(spectrum, nu: np.ndarray, coefficients: np.ndarray) -> np.
     weighted least-squares sandwich (J'WJ)^-1 J'W^2J (J'WJ)^-1 of the Jacobian J of the
     fitted increments (a constant beside them; taken out) — the Cramér-Rao form of the
     frequencies' errors, their neighbours' included."""
+    if nu.size == 0:  # the constant alone: no line's covariance (no pass over the record)
+        return np.zeros((0, 0))
     gram, fourth, _ = _jacobian_sums(spectrum, nu, coefficients)
     inverse = np.linalg.pinv(gram)
     return (inverse @ fourth @ inverse)[1:, 1:]
@@ -521,16 +549,29 @@ class _Spectrum:
         self.tests = self.searched * len(SCALES)
         self.alpha = -math.expm1(math.log1p(-level) / self.tests)
         self.rho2 = _ordinate_correlation(self.size)
+        self._unfitted = self._unfitted_scan = None
 
     def periodogram(self, fitted: np.ndarray) -> np.ndarray:
-        """The periodogram of the increments less ``fitted``."""
-        return increment_periodogram(self.increments - fitted, self.taper)
+        """The periodogram of the increments less ``fitted``. With nothing fitted it is the
+        record's own, kept: the search's first round and the description of a record without
+        lines both read it (an FFT of the whole record each)."""
+        if fitted.any():
+            return increment_periodogram(self.increments - fitted, self.taper)
+        if self._unfitted is None:
+            self._unfitted = increment_periodogram(self.increments, self.taper)
+        return self._unfitted
 
     def scan(self, power: np.ndarray, positions) -> list:
-        """:func:`_scan` of ``power`` with lines at ``positions`` (ordinates)."""
+        """:func:`_scan` of ``power`` with lines at ``positions`` (ordinates); that of the
+        record's own periodogram with no line is kept, as the periodogram is."""
         positions = np.asarray(positions, dtype=float)
+        if power is self._unfitted and positions.size == 0 and self._unfitted_scan is not None:
+            return self._unfitted_scan
         usable = _usable(power.size, self.highest, positions)
-        return _scan(power, usable, self.lowest, self.highest, positions, self.rho2, self.alpha)
+        results = _scan(power, usable, self.lowest, self.highest, positions, self.rho2, self.alpha)
+        if power is self._unfitted and positions.size == 0:
+            self._unfitted_scan = results
+        return results
 
     def fit(self, nu: np.ndarray):
         """(coefficients, fitted increments, covariance per unit spectrum) of lines at

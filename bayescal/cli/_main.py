@@ -66,24 +66,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _enable_compilation_cache() -> None:
-    """Keep JAX's compiled functions, and bayescal's traced optimisers
-    (:mod:`bayescal.inference._traced`), between runs: a second run neither traces nor
-    compiles them. Set through the environment, which JAX reads when it is first imported: a
-    command that never needs JAX does not pay for importing it."""
-    from pathlib import Path
-
-    root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    folder = root / "bayescal" / "jax"
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError:
-        return
-    os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", str(folder))
-    os.environ.setdefault("BAYESCAL_TRACE_CACHE", str(root / "bayescal" / "traces"))
-    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
-
-
 def _command(args) -> str:
     return " ".join(part for part in (args.command, getattr(args, "step", None)) if part)
 
@@ -221,7 +203,6 @@ class _Signals:
 def _run(args, signals: _Signals) -> int:
     from .._output import Outputs
 
-    _enable_compilation_cache()
     with Outputs():
         code = args.run(args)
         signals.settle()  # the outputs move into place as the block ends

@@ -1,6 +1,8 @@
 """``bayescal noise``: the noise of one static channel, classical and Bayesian."""
 
 import argparse
+import sys
+import time
 
 from .._errors import InputError
 from ._arguments import (
@@ -108,6 +110,11 @@ def add_parser(commands) -> None:
     )
     bayes.add_argument("--classical-only", action="store_true", help="skip the Bayesian model")
     bayes.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--profile",
+        action="store_true",
+        help="after the run, print the time each stage took on stderr",
+    )
     parser.set_defaults(run=run)
 
 
@@ -184,20 +191,50 @@ def _streamed_channel(args):
 
 
 def run(args) -> int:
+    if not args.profile:
+        return _analyse(args)
+    from .._stages import timing
+
+    start = time.perf_counter()
+    with timing() as times:
+        code = _analyse(args)
+    print(profile_table(times, time.perf_counter() - start), file=sys.stderr)
+    return code
+
+
+def profile_table(times: list[tuple[str, int, float]], total: float) -> str:
+    """The stages' times (:func:`bayescal._stages.timing`), a stage inside another indented
+    under it, and what the stages leave of the run's ``total`` (imports, JAX's start-up)."""
+    pending: list[tuple[int, list[str]]] = []
+    # Stages end inner first: an outer stage takes the rows of those that ended inside it.
+    for name, depth, seconds in times:
+        rows = [f"  {seconds:8.2f}  {'  ' * depth}{name}"]
+        rows += [row for inner, block in pending if inner > depth for row in block]
+        pending = [item for item in pending if item[0] <= depth] + [(depth, rows)]
+    lines = ["profile (s):", *(row for _, block in pending for row in block)]
+    outer = sum(seconds for _, depth, seconds in times if depth == 0)
+    lines.append(f"  {total - outer:8.2f}  other (imports, JAX's start-up, the text)")
+    lines.append(f"  {total:8.2f}  total")
+    return "\n".join(lines)
+
+
+def _analyse(args) -> int:
     from .._output import file_stem, write_json, write_netcdf
+    from .._stages import stage
     from ..models._terms import parse_terms
 
     terms = parse_terms(args.terms)
     exports = {f"--export {fmt}": path for fmt, path in args.export or ()}
     (folder,) = declare_outputs([args.file], {"--json": args.json, **exports}, {"--out": args.out})
     topic = None
-    if _streamed(args):
-        channel, window = _streamed_channel(args)
-        name = channel.channel
-    else:
-        recording, name = _recording(args)
-        channel, window = channel_of(args, recording, name)
-        topic = recording.topic
+    with stage("reading the recording"):
+        if _streamed(args):
+            channel, window = _streamed_channel(args)
+            name = channel.channel
+        else:
+            recording, name = _recording(args)
+            channel, window = channel_of(args, recording, name)
+            topic = recording.topic
     # The analysis's modules load once the input is known to be good.
     from ..classical._noise import classical_noise
     from ..report._export import plan_exports, write_exports
@@ -207,9 +244,10 @@ def run(args) -> int:
     fit = None
     if args.classical_only:
         try:
-            classical = classical_noise(
-                channel.values, channel.rate_hz, confidence=args.confidence, taus=args.taus
-            )
+            with stage("classical (bias, Allan deviation with intervals, readings)"):
+                classical = classical_noise(
+                    channel.values, channel.rate_hz, confidence=args.confidence, taus=args.taus
+                )
         except InputError as error:
             raise InputError(
                 error.problem, source=channel.source, column=name, fix=error.fix
@@ -237,15 +275,16 @@ def run(args) -> int:
         notes=window_notes,
         extra_notes=[] if fit is None else walker_note(fit.diagnostics.n_walkers, args.walkers),
     )
-    result = noise_document(analysis)
-    if args.json:
-        write_json(args.json, result)
-    exported = write_exports(exports, analysis)
-    if folder is not None:
-        stem = f"noise_{file_stem(name)}"
-        if fit is not None:
-            write_netcdf(fit.posterior, folder / f"{stem}_posterior.nc")
-        write_json(folder / f"{stem}.json", result)
+    with stage("writing the outputs"):
+        result = noise_document(analysis)
+        if args.json:
+            write_json(args.json, result)
+        exported = write_exports(exports, analysis)
+        if folder is not None:
+            stem = f"noise_{file_stem(name)}"
+            if fit is not None:
+                write_netcdf(fit.posterior, folder / f"{stem}_posterior.nc")
+            write_json(folder / f"{stem}.json", result)
     print(noise_text(analysis))
     for line in exported:
         print(line)

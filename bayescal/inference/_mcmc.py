@@ -28,6 +28,7 @@ import numpy as np
 from arviz_stats.base import array_stats
 
 from .._x64 import require_x64  # float64 before any JAX array
+from ._traced import persistent_jit
 
 MAX_RHAT = 1.01
 MIN_ESS = 400
@@ -69,24 +70,32 @@ class Diagnostics(eqx.Module):
         }
 
 
-@partial(jax.jit, static_argnames=("log_density", "treedef"))
-def _walker_log_densities(log_density, treedef, leaves, theta):
-    model = jax.tree_util.tree_unflatten(treedef, leaves)
+@persistent_jit
+def _walker_log_densities(log_density, model, theta):
     return jax.vmap(lambda walker: log_density(model, walker))(theta)
 
 
 def batch_log_density(log_density, model):
     """``theta (walkers, dimension) -> (walkers,)`` log densities ``log_density(model,
-    theta)`` as numpy, for emcee.
+    theta)`` as numpy, for emcee: every walker in one compiled call per step.
 
-    ``log_density`` must be a module-level function (it keys the compilation cache). The model
-    travels as its array leaves and tree structure: one compilation serves every model of the
-    same structure and shapes, and a plain list of arrays costs about half as much to pass on
-    each of the sampler's thousands of calls as the module through ``eqx.filter_jit``.
+    ``log_density`` must be a module-level function (it keys the compilation cache). The
+    function is traced, or loaded from the trace cache (:mod:`._traced`), at the first call,
+    and the model's arrays are moved to the device once: each of the sampler's thousands of
+    calls passes only the walkers' positions.
     """
     require_x64()
-    leaves, treedef = jax.tree_util.tree_flatten(model)
-    return lambda theta: np.asarray(_walker_log_densities(log_density, treedef, leaves, theta))
+    specialised = {}
+
+    def batch(theta):
+        theta = np.asarray(theta, dtype=float)
+        if theta.shape not in specialised:
+            function, leaves = _walker_log_densities.specialised(log_density, model, theta)
+            fixed = [jax.numpy.asarray(leaf) for leaf in leaves[:-1]]
+            specialised[theta.shape] = partial(function, *fixed)
+        return np.asarray(specialised[theta.shape](theta))
+
+    return batch
 
 
 def walker_count(dimension: int, requested: int = 32) -> int:

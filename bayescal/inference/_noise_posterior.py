@@ -14,8 +14,10 @@ from ..models._level import bias_given_noise
 from ..models._noise_model import NoiseModel
 from ..models._noise_problem import NoiseProblem
 from ..models._terms import PARAMETERS, TERMS
+from ..models._whittle import padded_index
 from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
 from ._optimize import Mode, maximum_a_posteriori
+from ._traced import persistent_jit
 
 
 def _scales(problem: NoiseProblem) -> list[bool]:
@@ -31,10 +33,20 @@ def _scales(problem: NoiseProblem) -> list[bool]:
 
 def noise_mode(problem: NoiseProblem) -> Mode:
     """The MAP from two starts — the prior centres (the Allan bounds) and a point well below
-    them, where the terms a record does not hold sit."""
+    them, where the terms a record does not hold sit. The optimiser takes the problem in the
+    shapes every record shares (:meth:`NoiseProblem.for_likelihood`)."""
     base = jnp.asarray(problem.prior.location)
     lowered = base - 3.0 * jnp.array(_scales(problem))
-    return maximum_a_posteriori(NoiseProblem.log_posterior, problem, (base, lowered))
+    return maximum_a_posteriori(
+        NoiseProblem.log_posterior, problem.for_likelihood(), (base, lowered)
+    )
+
+
+@persistent_jit
+def log_likelihood_at(problem: NoiseProblem, theta):
+    """The total Whittle log-likelihood of ``problem`` (:meth:`NoiseProblem.for_likelihood`)
+    at ``theta``: one compiled call."""
+    return jnp.sum(problem.pointwise_log_likelihood(theta))
 
 
 def noise_model(problem: NoiseProblem, values: dict) -> NoiseModel:
@@ -89,16 +101,22 @@ class NoisePosterior(eqx.Module):
 
 
 @eqx.filter_jit
-def _draw_quantities(problem: NoiseProblem, kept, key):
-    """Parameter values, bias draws (from its Gaussian conditional, whose mean and sd are
-    returned too) and the pointwise log-likelihood for each kept posterior draw."""
+def _draw_values(problem: NoiseProblem, kept, key):
+    """Parameter values and bias draws (from its Gaussian conditional, whose mean and sd are
+    returned too) for each kept posterior draw."""
     natural = problem.natural(kept)
     mean, variance = bias_given_noise(problem.level, problem.variances(kept), problem.ramp(kept))
     sd = jnp.sqrt(variance)
     natural["bias"] = mean + sd * jax.random.normal(key, mean.shape)
+    return natural, (mean, sd)
+
+
+@persistent_jit
+def _draw_densities(problem: NoiseProblem, kept):
+    """The pointwise log-likelihood and the log posterior of each kept posterior draw, of
+    ``problem`` in the shapes every record shares (:meth:`NoiseProblem.for_likelihood`)."""
     pointwise = jax.vmap(jax.vmap(problem.pointwise_log_likelihood))(kept)
-    log_posterior = jax.vmap(jax.vmap(problem.log_posterior))(kept)
-    return natural, (mean, sd), pointwise, log_posterior
+    return pointwise, jax.vmap(jax.vmap(problem.log_posterior))(kept)
 
 
 @eqx.filter_jit
@@ -122,7 +140,7 @@ def sample_noise(
     rng = np.random.default_rng(seed)
     estimate = noise_mode(problem)
     sampler, converged = sample_ensemble(
-        batch_log_density(NoiseProblem.log_posterior, problem),
+        batch_log_density(NoiseProblem.log_posterior, problem.for_likelihood()),
         estimate.theta,
         estimate.covariance,
         rng,
@@ -131,9 +149,11 @@ def sample_noise(
         progress,
     )
     diagnostics, kept = diagnose(sampler, problem.parameters, converged, estimate.converged)
-    natural, bias_conditional, pointwise, log_posterior = _draw_quantities(
+    natural, bias_conditional = _draw_values(
         problem, jnp.asarray(kept), jax.random.PRNGKey(int(rng.integers(2**31)))
     )
+    pointwise, log_posterior = _draw_densities(problem.for_likelihood(), jnp.asarray(kept))
+    pointwise = np.asarray(pointwise)[..., padded_index(problem.spectral)]
     natural = {name: np.asarray(value) for name, value in natural.items()}
     map_values, map_sd = map_summary(problem, estimate)
     summaries = {

@@ -39,6 +39,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import equinox as eqx
+import jax.numpy as jnp
 import numpy as np
 from scipy import stats
 
@@ -56,7 +57,7 @@ from ..models._terms import (
 )
 from ..models._whittle import SpectralSummary
 from ..models.effects._parameter import Context
-from ._noise_posterior import map_summary, noise_mode, noise_model
+from ._noise_posterior import log_likelihood_at, map_summary, noise_mode, noise_model
 from ._optimize import Mode
 
 DECISIVE_LOG_BAYES_FACTOR = math.log(100.0)
@@ -191,7 +192,7 @@ def laplace_log_evidence(problem: NoiseProblem, mode: Mode) -> float:
     prior = problem.prior
     z = (mode.theta - prior.location) / prior.scale
     log_prior = -0.5 * float(np.sum(z * z)) - float(np.sum(np.log(prior.scale)))
-    log_likelihood = float(np.sum(problem.pointwise_log_likelihood(mode.theta)))
+    log_likelihood = float(log_likelihood_at(problem.for_likelihood(), jnp.asarray(mode.theta)))
     return log_likelihood + log_prior - 0.5 * float(log_det)
 
 

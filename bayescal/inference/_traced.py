@@ -12,15 +12,20 @@ it in milliseconds and XLA's compilation comes from JAX's cache; a changed line 
 or another JAX misses and traces afresh. The exported function computes what the traced one
 does: the same StableHLO, compiled by the same XLA.
 
-The cache is off unless ``BAYESCAL_TRACE_CACHE`` names a folder. The command line sets it
-to ``~/.cache/bayescal/traces`` (``XDG_CACHE_HOME`` moves it), beside JAX's own cache; a
-library user opts in by setting it. Arguments whose static part has no stable description
+The cache is the folder ``BAYESCAL_TRACE_CACHE`` names: ``~/.cache/bayescal/traces`` unless
+the environment says otherwise, for the library and the command line alike
+(:mod:`bayescal._caches`); empty, nothing is kept. A function traced afresh says so where a
+progress bar was asked for (:func:`announcing`): the first run on a machine pays for it once.
+Arguments whose static part has no stable description
 (an object printed with its address) are traced as ``eqx.filter_jit`` would, and not stored.
 """
 
+import contextlib
+import contextvars
 import functools
 import hashlib
 import os
+import sys
 from collections.abc import Callable
 from importlib.metadata import version
 from pathlib import Path
@@ -29,35 +34,77 @@ import equinox as eqx
 import jax
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from .._caches import TRACE_CACHE
 
-CACHE_VARIABLE = "BAYESCAL_TRACE_CACHE"
+_ANNOUNCE = contextvars.ContextVar("bayescal_announce_tracing", default=None)
+"""Inside :func:`announcing`: a one-item list, whether tracing was announced yet."""
+
+
+@contextlib.contextmanager
+def announcing(enabled: bool):
+    """Within the block, the first function traced afresh writes one line beside the
+    progress bar (tqdm's, on stderr) saying so; ``enabled`` False: nothing is written."""
+    token = _ANNOUNCE.set([False] if enabled else None)
+    try:
+        yield
+    finally:
+        _ANNOUNCE.reset(token)
+
+
+def _announce(folder: str) -> None:
+    state = _ANNOUNCE.get()
+    if state is None or state[0]:
+        return
+    state[0] = True
+    from tqdm import tqdm
+
+    tqdm.write(
+        f"compiling the model's functions for this record's shapes (first use on this "
+        f"machine; kept in {folder}, later runs skip it)",
+        file=sys.stderr,
+    )
+
+
 _PACKAGES = ("jax", "jaxlib", "equinox", "optimistix", "lineax")
 
 
 def persistent_jit(fun: Callable) -> Callable:
     """``eqx.filter_jit(fun)`` whose traced function persists between runs (module
-    docstring). ``fun`` takes positional arguments and returns a pytree of arrays."""
+    docstring). ``fun`` takes positional arguments and returns a pytree of arrays.
+
+    The function returned has a ``specialised(*args)`` attribute: (a function of the arrays
+    of ``args``, flattened, and those arrays), for a caller that calls it thousands of times
+    with only the last of them changing (the sampler's walkers): no key is computed per
+    call."""
     jitted = eqx.filter_jit(fun)
     compiled = {}
 
-    @functools.wraps(fun)
-    def call(*args):
-        folder = os.environ.get(CACHE_VARIABLE)
-        if not folder:
-            return jitted(*args)
+    def specialised(*args):
         dynamic, static = eqx.partition(args, eqx.is_array)
         leaves, treedef = jax.tree_util.tree_flatten(dynamic)
-        key = _key(fun, treedef, static, leaves)
+        folder = os.environ.get(TRACE_CACHE)
+        key = _key(fun, treedef, static, leaves) if folder else None
         if key is None:
-            return jitted(*args)
+
+            def traced(*arrays):
+                return jitted(*eqx.combine(jax.tree_util.tree_unflatten(treedef, arrays), static))
+
+            return traced, leaves
         if key not in compiled:
             path = Path(folder) / f"{fun.__name__}-{key}.stablehlo"
             exported = _load(path)
             if exported is None:
+                _announce(folder)
                 exported = _export_and_store(fun, treedef, static, leaves, path)
             compiled[key] = jax.jit(exported.call)
-        return compiled[key](*leaves)
+        return compiled[key], leaves
 
+    @functools.wraps(fun)
+    def call(*args):
+        function, leaves = specialised(*args)
+        return function(*leaves)
+
+    call.specialised = specialised
     return call
 
 
@@ -79,7 +126,7 @@ def _key(fun, treedef, static, leaves) -> str | None:
     has no stable description."""
     static_leaves, static_treedef = jax.tree_util.tree_flatten(static)
     tokens = [_token(leaf) for leaf in static_leaves]
-    structure = f"{treedef}|{static_treedef}"
+    structure = _structure(treedef, static_treedef)
     if None in tokens or " at 0x" in structure:
         return None
     description = "\n".join(
@@ -92,6 +139,22 @@ def _key(fun, treedef, static, leaves) -> str | None:
         ]
     )
     return hashlib.sha256(description.encode()).hexdigest()[:32]
+
+
+_STRUCTURES: dict = {}
+
+
+def _structure(treedef, static_treedef) -> str:
+    """The printed structure of the arguments, kept for structures met before: printing a
+    model's static parts (equinox prints every field) took 70 ms a call, 2.8 s of a fit's
+    40 calls. Structures that cannot be hashed are printed each time."""
+    pair = (treedef, static_treedef)
+    try:
+        if pair not in _STRUCTURES:
+            _STRUCTURES[pair] = f"{treedef}|{static_treedef}"
+        return _STRUCTURES[pair]
+    except TypeError:
+        return f"{treedef}|{static_treedef}"
 
 
 @functools.cache

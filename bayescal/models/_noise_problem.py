@@ -19,7 +19,7 @@ from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from ._components import Components
 from ._level import LevelSummary, level_summary
 from ._terms import PARAMETERS, TERM_OF_PARAMETER, TERMS
-from ._whittle import SpectralSummary, spectral_summary, whittle_log_likelihood
+from ._whittle import SpectralSummary, padded_summary, spectral_summary, whittle_log_likelihood
 from .effects._parameter import Context
 
 PRIOR_LOG_SD = 4.0
@@ -77,7 +77,8 @@ class NoiseProblem(eqx.Module):
     """
 
     spectral: SpectralSummary
-    level: LevelSummary
+    level: LevelSummary | None
+    """The block means (None: left out, :meth:`for_likelihood`)."""
     prior: NoisePrior
     lsb: np.ndarray = eqx.field(default_factory=lambda: np.asarray(0.0))
     mask: np.ndarray | None = None
@@ -183,6 +184,17 @@ class NoiseProblem(eqx.Module):
 
     def log_prior(self, theta):
         return -0.5 * jnp.sum(((theta - self.prior.location) / self.prior.scale) ** 2)
+
+    def for_likelihood(self) -> "NoiseProblem":
+        """This problem as its log density reads it, in shapes that do not change with the
+        record: the spectral summary padded (:func:`~bayescal.models._whittle.
+        padded_summary`: the same log density, its pointwise values followed by zeros) and
+        the level left out (the bias is drawn apart, given the noise). What the compiled
+        optimiser and sampler take, so that records whose arrays differ only in length share
+        one trace."""
+        return NoiseProblem(
+            padded_summary(self.spectral), None, self.prior, lsb=self.lsb, mask=self.mask
+        )
 
     def log_posterior(self, theta):
         value = self.log_prior(theta) + jnp.sum(self.pointwise_log_likelihood(theta))

@@ -36,6 +36,14 @@ Three refinements make it hold on real records of any length:
   stays safe. A likelihood evaluation costs three logarithms per bin — a few hundred bins —
   not one per frequency.
 
+The bins grow with the logarithm of the record's length, so every record has a few hundred
+of them; :func:`padded_summary` rounds their number up to a multiple of BIN_BUCKET, and the
+segments' to one of SEGMENT_BUCKET, with padding that weighs exactly zero. The compiled
+likelihood, optimiser and sampler then take arrays of one shape for records of many lengths
+(every gap-free one of 2^20 samples and more) and are kept on disk between processes
+(:mod:`bayescal._caches`); what else keys their trace (the components, among them the
+Gauss-Markov term's grid of correlation times over the record's decades) is the model's.
+
 Deterministic terms (a thermal polynomial, a sinusoid, an exponential transient ...) enter as
 regressors x_j with coefficients beta: the periodogram of the increments of y - X beta is a
 quadratic form in beta, so each bin also keeps the hat-weighted cross sums of y with every
@@ -73,6 +81,11 @@ MIN_INCREMENTS = 32
 MAX_SEGMENT = 1 << 21
 """Samples in the longest piece one periodogram is taken of (a longer gap-free run is cut
 into equal pieces): 5.8 h at 100 Hz."""
+BIN_BUCKET = 128
+"""Bins are padded to a multiple of this (:func:`padded_summary`): a gap-free record of 2^17
+to 2^19 samples has 412 to 481 bins (512 padded), every longer one 516 or 551 (640)."""
+SEGMENT_BUCKET = 8
+"""Segments (one mean increment each) are padded to a multiple of this."""
 
 
 class SpectralSummary(eqx.Module):
@@ -110,6 +123,9 @@ class SpectralSummary(eqx.Module):
     """(3, regressors, regressors, bins): sum_j Re(conj(X_ij) X_lj) hat_k(u_j)."""
     mean_regressor: np.ndarray | None = None
     """(segments, regressors): taper-weighted mean increment of each regressor."""
+    segment_weight: np.ndarray | None = None
+    """1 for each segment's mean increment and 0 for padding (:func:`padded_summary`);
+    None: every segment counts."""
 
     @property
     def shaped(self) -> np.ndarray:
@@ -435,7 +451,64 @@ def whittle_log_likelihood(summary: SpectralSummary, variances, ramp=0.0, beta=N
         variance = variance + jnp.einsum("c,cs->s", filtered[1], shaped)
     residual = mean_increment - ramp / summary.rate_hz
     mean_terms = -0.5 * (jnp.log(2 * jnp.pi * variance) + residual**2 / variance)
+    if summary.segment_weight is not None:
+        mean_terms = summary.segment_weight * mean_terms
     return jnp.concatenate((bins, mean_terms))
+
+
+def padded_summary(summary: SpectralSummary) -> SpectralSummary:
+    """``summary`` with its bins padded to a multiple of :data:`BIN_BUCKET` and its segments
+    to one of :data:`SEGMENT_BUCKET` (module docstring): the likelihood it gives is the
+    same, its pointwise values the same followed by zeros (:func:`padded_index` picks the
+    real ones).
+
+    A padded bin has no frequencies and weight zero, and the last bin's nodes and basis (a
+    finite, positive spectrum: nothing undefined is multiplied by zero); a padded segment has
+    the first segment's variance, a zero mean increment and weight zero. A summary with
+    regressors is returned as it is (their fits are not the noise fit's shapes)."""
+    if summary.cross is not None:
+        return summary
+    bins = summary.n_bins
+    segments = summary.mean_increment.size
+    extra_bins = -bins % BIN_BUCKET
+    extra_segments = -segments % SEGMENT_BUCKET
+
+    def bins_padded(array, value=None):
+        array = np.asarray(array)
+        tail = np.repeat(array[..., -1:], extra_bins, axis=-1)
+        if value is not None:
+            tail = np.full_like(tail, value)
+        return np.concatenate((array, tail), axis=-1)
+
+    mean_basis = np.asarray(summary.mean_basis)
+    return SpectralSummary(
+        count=bins_padded(summary.count, 0),
+        frequency_hz=bins_padded(summary.frequency_hz),
+        node_power=bins_padded(summary.node_power, 0.0),
+        node_count=bins_padded(summary.node_count, 0.0),
+        node_frequency=bins_padded(summary.node_frequency),
+        basis=bins_padded(summary.basis),
+        weight=bins_padded(summary.weight, 0.0),
+        mean_increment=np.concatenate((summary.mean_increment, np.zeros(extra_segments))),
+        mean_basis=np.concatenate(
+            (mean_basis, np.repeat(mean_basis[:, :1], extra_segments, axis=1)), axis=1
+        ),
+        duration_s=summary.duration_s,
+        rate_hz=summary.rate_hz,
+        components=summary.components,
+        segment_weight=np.concatenate((np.ones(segments), np.zeros(extra_segments))),
+    )
+
+
+def padded_index(summary: SpectralSummary) -> np.ndarray:
+    """The positions of ``summary``'s pointwise log-likelihood values (its bins, then its
+    segments) among those of :func:`padded_summary` of it."""
+    padded = summary.n_bins + -summary.n_bins % BIN_BUCKET
+    if summary.cross is not None:
+        padded = summary.n_bins
+    return np.concatenate(
+        (np.arange(summary.n_bins), padded + np.arange(summary.mean_increment.size))
+    )
 
 
 def regression_coefficients(summary: SpectralSummary, variances, ramp=0.0, ridge=0.0):

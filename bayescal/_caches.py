@@ -1,0 +1,49 @@
+"""Where bayescal keeps what it compiles, between processes: one home for the setting, used by
+the library and the command line alike.
+
+Two caches, both under ``~/.cache/bayescal`` (``XDG_CACHE_HOME`` moves it): JAX's persistent
+compilation cache (``jax/``: XLA's compiled code, every compilation kept however quick) and
+bayescal's traced functions (``traces/``, :mod:`bayescal.inference._traced`: the tracing before
+XLA, which JAX's cache does not keep). With both warm a new process neither traces nor
+compiles the noise fit's functions; a changed line of bayescal, another JAX or another device
+misses and traces afresh, and deleting either folder is always safe.
+
+:func:`enable_caches` runs when bayescal first loads JAX (:mod:`bayescal._x64`), so a library
+call (``bc.fit_noise`` in a notebook) and a command share one cache. It only fills in what the
+environment leaves unset: ``JAX_COMPILATION_CACHE_DIR`` and ``BAYESCAL_TRACE_CACHE`` set to
+another folder move a cache, set to an empty string turn it off. Setting JAX's cache is a
+process-wide choice, like the 64-bit mode: a caller's own JAX functions are then kept there
+too, unless the caller set a cache of its own first.
+"""
+
+import os
+import sys
+from pathlib import Path
+
+TRACE_CACHE = "BAYESCAL_TRACE_CACHE"
+"""The environment variable naming the folder of traced functions (empty: none kept)."""
+
+
+def cache_root() -> Path:
+    """``$XDG_CACHE_HOME/bayescal``, or ``~/.cache/bayescal``."""
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "bayescal"
+
+
+def enable_caches() -> None:
+    """Turn on JAX's compilation cache and bayescal's trace cache where the environment does
+    not say otherwise (module docstring). Set through the environment when JAX is not yet
+    imported (a command that never needs JAX does not pay for importing it), and through
+    JAX's configuration when it is. A folder that cannot be made leaves both off."""
+    root = cache_root()
+    try:
+        (root / "jax").mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return
+    ours = "JAX_COMPILATION_CACHE_DIR" not in os.environ
+    os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", str(root / "jax"))
+    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
+    os.environ.setdefault(TRACE_CACHE, str(root / "traces"))
+    jax = sys.modules.get("jax")
+    if ours and jax is not None and not jax.config.jax_compilation_cache_dir:
+        jax.config.update("jax_compilation_cache_dir", str(root / "jax"))
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)

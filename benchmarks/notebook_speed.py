@@ -1,0 +1,108 @@
+"""The fit in a notebook: ``bc.fit_noise`` called again and again in one Python process, its
+imports excluded, beside allantools' ``oadev`` plus a curve fit on the same array in the same
+process (issue 38).
+
+    python benchmarks/notebook_speed.py [--sizes 1048576,8388608] [--calls 3]
+
+For each size, a static gyro record at 100 Hz (white noise N and a rate random walk K) is
+fitted with the defaults (``bc.fit_noise(y, rate_hz=100.0, seed=1)``: terms chosen by
+evidence, the full posterior) in fresh processes sharing one cache folder, empty at the start
+(``XDG_CACHE_HOME``: bayescal's traces and JAX's compilations, :mod:`bayescal._caches`):
+
+- cold: the first process on a machine (the first size), which traces and compiles;
+- warmed by the sizes before: the first process of a later size, whose bins, padded, are those
+  of the sizes before (2^20 and 2^23 samples: 640): what it still compiles is what depends on
+  the record beyond its bins (the block means of the bias, the checks);
+- warm: a new process after it, as a user's next notebook session is.
+
+Each process times, after its imports, the peer (``_common.allan_wls_fit``: allantools'
+overlapping Allan deviation at octave taus and the weighted least-squares fit of N, B, K),
+then ``--calls`` calls of ``fit_noise``: the first call of a process, then later calls on the
+same record. The peer is timed again after the last call: the machine is shared, so read the
+ratios to the peer of the same process. Targets (issue 38): first call in a fresh process
+with a warm cache <= 5 s at 2^20; later calls <= 1 s at 2^20 and <= the peer at 2^23.
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+RATE = 100.0
+TRUTH = {"N": 0.005, "K": 5e-6}
+
+
+def child(samples: int, calls: int) -> dict:
+    """The timings of one process (its imports excluded)."""
+    from _common import allan_wls_fit
+
+    import bayescal as bc
+
+    bc.fit_noise  # noqa: B018  (bayescal's names load on first use: an import, excluded)
+    values = bc.NoiseModel(rate_hz=RATE, bias=0.3, **TRUTH).simulate(samples, seed=1)
+    start = time.perf_counter()
+    allan_wls_fit(values, RATE)
+    peer = [time.perf_counter() - start]
+    times, fit = [], None
+    for _ in range(calls):
+        start = time.perf_counter()
+        fit = bc.fit_noise(values, rate_hz=RATE, seed=1)
+        times.append(time.perf_counter() - start)
+    start = time.perf_counter()
+    allan_wls_fit(values, RATE)
+    peer.append(time.perf_counter() - start)
+    return {
+        "peer_s": peer,
+        "fit_s": times,
+        "terms": list(fit.terms),
+        "passed": bool(fit.passed),
+        "N": fit.parameters["N"].mean,
+    }
+
+
+def run(samples: int, calls: int, cache: Path) -> dict:
+    """:func:`child` in a fresh process whose caches live in ``cache``."""
+    environment = {**os.environ, "XDG_CACHE_HOME": str(cache)}
+    for name in ("JAX_COMPILATION_CACHE_DIR", "BAYESCAL_TRACE_CACHE"):
+        environment.pop(name, None)
+    command = [sys.executable, __file__, "--child", str(samples), "--calls", str(calls)]
+    output = subprocess.run(
+        command, env=environment, check=True, capture_output=True, text=True
+    ).stdout
+    return json.loads(output.splitlines()[-1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", default=f"{2**20},{2**23}")
+    parser.add_argument("--calls", type=int, default=3)
+    parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        print(json.dumps(child(args.child, args.calls)))
+        return
+    print(f"bc.fit_noise in one process, imports excluded; {os.cpu_count()} CPU core(s)")
+    with tempfile.TemporaryDirectory() as folder:
+        for index, samples in enumerate(int(size) for size in args.sizes.split(",")):
+            first_label = "cold cache" if index == 0 else "cache warmed by the sizes before"
+            for label in (first_label, "warm cache"):
+                result = run(samples, args.calls, Path(folder))
+                first, *later = result["fit_s"]
+                peer = min(result["peer_s"])
+                print(
+                    f"  2^{samples.bit_length() - 1} samples, {label}: first call "
+                    f"{first:.1f} s ({first / peer:.1f}x peer), later calls "
+                    f"{', '.join(f'{t:.2f}' for t in later)} s "
+                    f"({', '.join(f'{t / peer:.1f}' for t in later)}x peer); peer "
+                    f"(allantools oadev + WLS) {', '.join(f'{t:.2f}' for t in result['peer_s'])}"
+                    f" s; terms {'+'.join(result['terms'])}, checks "
+                    f"{'passed' if result['passed'] else 'FAILED'}, N {result['N']:.5f}"
+                )
+
+
+if __name__ == "__main__":
+    main()

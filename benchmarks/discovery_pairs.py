@@ -17,7 +17,7 @@ long), holding both effects of its pair at random sizes the record can be expect
   output filter with F 0.3-0.6 (vibration read through the part's own low-pass);
 - ``quantization+white``: the samples rounded to a grid of 0.5-1 sample sd (a low-resolution
   converter: the grid is named ``quantization``);
-- ``bias_step+rate_random_walk``: a step of 0.3-0.6 sample sd at 25-75 % of the record
+- ``bias_step+rate_random_walk``: a step of 0.5-1 sample sd at 25-75 % of the record
   (a mode change), and a random walk as above.
 
 A record is a hit when discovery names exactly the pair (a random walk it adds beside it
@@ -84,7 +84,7 @@ def simulate(pair: str, rng, minutes: float) -> np.ndarray:
             values = np.round(values / lsb) * lsb
         case "bias_step+rate_random_walk":
             at = rng.uniform(0.25, 0.75) * n / RATE
-            size = rng.uniform(0.3, 0.6) * WHITE_SD * rng.choice([-1, 1])
+            size = rng.uniform(0.5, 1.0) * WHITE_SD * rng.choice([-1, 1])
             values += size * (t >= at) + _random_walk(rng, n)
         case _:
             raise ValueError(f"pair={pair!r}: one of {', '.join(PAIRS)}")

@@ -12,7 +12,9 @@ long), holding both effects of its pair at random sizes the record can be expect
   0.5-1.5x the white noise's, and flicker of 0.15-0.25 sample sd (the two slow terms of
   every MEMS gyro);
 - ``gauss_markov+rate_random_walk``: a Gauss-Markov bias of 0.3-0.6 sample sd with tau
-  30-90 s, and a random walk as above (a navigation filter's usual bias model);
+  2-5 % of the record (it returns to its mean 20-50 times: a Gauss-Markov term is told from a
+  random walk by that return, worth about T / (4 tau) nats), and a random walk as above (a
+  navigation filter's usual bias model);
 - ``sinusoid+output_filter``: a line of 0.3-0.6 sample sd between 1 and 10 Hz, and a one-tap
   output filter with F 0.3-0.6 (vibration read through the part's own low-pass);
 - ``quantization+white``: the samples rounded to a grid of 0.5-1 sample sd (a low-resolution
@@ -70,7 +72,7 @@ def simulate(pair: str, rng, minutes: float) -> np.ndarray:
             flicker = bc.NoiseModel(RATE, B=rng.uniform(0.15, 0.25) * WHITE_SD)
             values += _random_walk(rng, n) + flicker.simulate(n, seed=int(rng.integers(2**31)))
         case "gauss_markov+rate_random_walk":
-            tau, sigma = rng.uniform(30, 90), rng.uniform(0.3, 0.6) * WHITE_SD
+            tau, sigma = rng.uniform(0.02, 0.05) * n / RATE, rng.uniform(0.3, 0.6) * WHITE_SD
             phi = math.exp(-1 / (RATE * tau))
             drive = rng.standard_normal(n) * sigma * math.sqrt(1 - phi * phi)
             values += signal.lfilter([1.0], [1.0, -phi], drive) + _random_walk(rng, n)

@@ -136,3 +136,21 @@ def test_two_sinusoids_are_reported_apart_with_frequency_amplitude_and_phase():
         assert low <= angle["q05"] <= angle["mean"] <= angle["q95"] <= high
         # the phase about the truth (mod 2 pi), within 4 sd
         assert abs(np.angle(np.exp(1j * (angle["mean"] - phase)))) < 4 * angle["sd"]
+
+
+def test_a_line_left_is_advised_a_longer_record_only_beside_a_fitted_one():
+    """A line the final model leaves at 12.3 Hz in a 53-minute record: no advice to record
+    longer (the record resolves 0.3 mHz), unless a fitted sinusoid lies within 5 resolutions
+    of it — then a longer record is what separates the two."""
+    from bayescal.capabilities._discovery_unexplained import _mismatch
+
+    duration = 53 * 60.0
+    check = {
+        "name": "spectral_line",
+        "p_value": 1e-9,
+        "location": {"frequency_hz": 12.3, "power_over_model": 80.0},
+    }
+    alone = _mismatch(check, 100.0, duration, False, (31.0,))
+    beside = _mismatch(check, 100.0, duration, False, (12.3 + 2 / duration,))
+    assert "longer record" not in alone["advice"]
+    assert "longer record separates the two" in beside["advice"]

@@ -10,6 +10,7 @@ from ..inference._discovery_search import (
     SearchResult,
     check_band,
 )
+from ..models.effects.sinusoid import SAME_LINE_BINS, Sinusoid
 
 ENOUGH_CYCLES = 10
 """A record that holds this many cycles of the slowest frequency (or averaging times) where a
@@ -30,11 +31,15 @@ def _slowest_period(check: dict) -> float | None:
     return None
 
 
-def _mismatch(check: dict, rate_hz: float, duration_s: float, in_time: bool) -> dict:
+def _mismatch(
+    check: dict, rate_hz: float, duration_s: float, in_time: bool, lines_hz: tuple = ()
+) -> dict:
     """One failing check of the final model described for a user: where (time and/or
     frequency), what it looks like, how large, and what to do about it. ``in_time``: a scan
     located a departure in time, which is then what a slow mismatch of the spectrum or the
-    Allan deviation is (not too little data)."""
+    Allan deviation is (not too little data). ``lines_hz``: the sinusoids' frequencies the
+    search fitted (Hz); a line left within :data:`SAME_LINE_BINS` resolutions (1 / duration)
+    of one is the only line a longer record is advised for (it would separate the two)."""
     name, where = check["name"], check["location"]
     entry = {"check": name, "band": check_band(check, rate_hz), "p_value": check["p_value"]}
     slowest_s = _slowest_period(check)
@@ -100,7 +105,15 @@ def _mismatch(check: dict, rate_hz: float, duration_s: float, in_time: bool) -> 
                 "(more lines than they take, harmonics of a periodic signal that is not a "
                 "sine — a sawtooth, a switching controller — or a line that wanders): look "
                 "for a periodic source at that frequency and its multiples"
-                + ("; a longer record separates close lines" if short else "")
+                + (
+                    f"; it lies within {SAME_LINE_BINS:g} resolutions "
+                    f"({1 / duration_s:.3g} Hz) of a fitted sinusoid: a longer record "
+                    "separates the two"
+                    if any(
+                        abs(frequency - line) <= SAME_LINE_BINS / duration_s for line in lines_hz
+                    )
+                    else ""
+                )
             )
         case "spectrum_bands" | "allan_deviation":
             if name == "spectrum_bands":
@@ -213,8 +226,13 @@ def unexplained_of(result: SearchResult, still_failing: list[str]) -> dict:
     best candidate where none was decisive."""
     data = result.data
     in_time = bool({"level_scan", "variance_scan"} & set(still_failing))
+    lines_hz = tuple(
+        finding.effect.frequency_hz
+        for finding in (*result.findings, *result.withdrawn)
+        if isinstance(finding.effect, Sinusoid)
+    )
     mismatches = [
-        _mismatch(check, data.rate_hz, data.duration_s, in_time)
+        _mismatch(check, data.rate_hz, data.duration_s, in_time, lines_hz)
         for check in result.final_checks
         if check["name"] in still_failing
     ]

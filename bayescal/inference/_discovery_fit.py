@@ -39,7 +39,7 @@ from ..models._composite import (
     summary_components,
 )
 from ..models._whittle import spectral_summary, whittle_log_likelihood
-from ..models.effects._base import GRID_POINTS, PARABOLIC_STEPS
+from ..models.effects._base import GRID_POINTS, PARABOLIC_STEPS, SHORTEST_DECAY_S
 from ..models.effects.bias_step import PROFILE_DROP as STEP_PROFILE_DROP
 from ..models.effects.bias_step import step_profile
 from ..recording._levels import discrete_step
@@ -142,8 +142,8 @@ class Context:
     def fit(self, spec: ModelSpec) -> ModelFit:
         return fit_model(self, spec)
 
-    def search_time(self, make_spec, key: str):
-        return search_time(self, make_spec, key)
+    def search_time(self, make_spec, key: str, shortest_s: float = SHORTEST_DECAY_S):
+        return search_time(self, make_spec, key, shortest_s)
 
     def line_frequency(self, fit: ModelFit) -> float:
         return line_search(fit, self.data.rate_hz)[1]
@@ -296,23 +296,31 @@ def fit_model(context: "Context", spec: ModelSpec) -> ModelFit:
     )
 
 
-def _shortest_time_constant(data) -> float:
-    """The shortest time constant searched, s: 5 s, or 20 samples (below it a decay or a
-    Gauss-Markov process is white noise to the record)."""
-    return max(5.0, 20.0 / data.rate_hz)
+SHORTEST_SAMPLES = 20
+"""The shortest time constant a search looks at, in samples: below it a decay or a
+Gauss-Markov process is white noise to the record."""
 
 
-def _time_grid(data) -> np.ndarray | None:
+def _shortest_time_constant(data, shortest_s: float) -> float:
+    """The shortest time constant searched, s: ``shortest_s``, and never below
+    :data:`SHORTEST_SAMPLES` samples."""
+    return max(shortest_s, SHORTEST_SAMPLES / data.rate_hz)
+
+
+def _time_grid(data, shortest_s: float) -> np.ndarray | None:
     """The searched time constants, up to a third of the record; None when that third is no
     longer than the shortest (a record of seconds: a pad window)."""
-    shortest, longest = _shortest_time_constant(data), data.duration_s / 3.0
+    shortest, longest = _shortest_time_constant(data, shortest_s), data.duration_s / 3.0
     if longest <= shortest:
         return None
     return np.geomspace(shortest, longest, GRID_POINTS)
 
 
-def search_time(context: "Context", make_spec, key: str) -> tuple[ModelFit, dict] | None:
-    """The best fit over a log grid of time constants, refined around the best point by the
+def search_time(
+    context: "Context", make_spec, key: str, shortest_s: float = SHORTEST_DECAY_S
+) -> tuple[ModelFit, dict] | None:
+    """The best fit over a log grid of time constants from ``shortest_s`` (s; at least
+    :data:`SHORTEST_SAMPLES` samples) to a third of the record, refined around the best point by the
     midpoints to its neighbours and then by parabolic steps in log time constant (a
     deterministic term with a time constant off by a third leaves a residual that a noise
     term would take up); the profile (time constant, Schwarz score) is returned for the
@@ -325,7 +333,7 @@ def search_time(context: "Context", make_spec, key: str) -> tuple[ModelFit, dict
     interval. None for a record too short to search (:func:`_time_grid`)."""
     previous = context.time_constants.get(key)
     if previous is None:
-        grid = _time_grid(context.data)
+        grid = _time_grid(context.data, shortest_s)
         if grid is None:
             return None
         grid = list(grid)
@@ -358,7 +366,7 @@ def search_time(context: "Context", make_spec, key: str) -> tuple[ModelFit, dict
         # A flat profile puts the ends where the record tells nothing apart: past its length
         # a decay is a ramp, below the shortest time constant white noise (and a Gauss-Markov
         # block covariance at 10^35 s is rounding error, not a covariance).
-        low, high = _shortest_time_constant(context.data), context.data.duration_s
+        low, high = _shortest_time_constant(context.data, shortest_s), context.data.duration_s
         for log_end in (peak[0] - half, peak[0] + half):
             # Capped before exp, which overflows at such an end.
             clipped = min(max(math.exp(min(log_end, math.log(high))), low), high)

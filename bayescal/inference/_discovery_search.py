@@ -46,7 +46,7 @@ import numpy as np
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
 from ..classical._allan import allan_deviation
-from ..models._composite import BASELINE_TERMS, ModelFit, ModelSpec
+from ..models._composite import BASELINE_TERMS, ModelFit, ModelSpec, bin_ratios
 from ..models._noise_problem import noise_summaries
 from ..models._terms import (
     CANDIDATE_TERMS,
@@ -61,7 +61,8 @@ from ..models.effects.outliers import Outliers, outlier_scan, without_outliers
 from ..models.effects.output_filter import OutputFilter
 from ..models.effects.quantization import Quantization
 from ..models.effects.saturation import Saturation, impute_clipped, saturation_scan
-from ._checks import CHECK_LEVEL, run_checks
+from ..models.effects.spectral_lines import SpectralLines
+from ._checks import CHECK_LEVEL, run_checks, spectrum_check
 from ._discovery_fit import Context, DiscoveryData, fit_model
 from ._priors import default_prior
 from ._scans import variance_scan
@@ -358,7 +359,7 @@ def _decided_before_search(
         findings.append(_grid_finding(context, current))
     rate_hz = context.data.rate_hz
     if _high_band_deficit(baseline_checks, rate_hz) and not current.spec.has("output_filter"):
-        decided = decide_output_filter(context, baseline)
+        decided = decide_output_filter(_less_lines(context), baseline)
         if decided is not None:
             effect, log_bayes_factor, record = decided
             context = context.with_lowpass(effect)  # every model from here on sees the filter
@@ -417,7 +418,7 @@ def _high_band_deficit(checks: list[dict], rate_hz: float) -> bool:
     signature of an output filter (a low-pass takes power away, only at high frequency)."""
     (spectrum,) = [check for check in checks if check["name"] == "spectrum_bands"]
     bands = spectrum["bands"]
-    return not spectrum["passed"] and any(
+    return spectrum["p_value"] < CHECK_LEVEL and any(
         band["frequency_hz"][0] >= HIGH_FREQUENCY_FRACTION * rate_hz
         and band["power_over_model"] < 1
         and band["p_value"] * len(bands) < CHECK_LEVEL
@@ -425,14 +426,35 @@ def _high_band_deficit(checks: list[dict], rate_hz: float) -> bool:
     )
 
 
+def _less_lines(context: Context) -> Context:
+    """The context of the record less its coherent spectral lines, found as the noise fit
+    finds them (the ``spectral_lines`` term, :func:`~bayescal.classical._lines.find_lines`);
+    ``context`` itself when there are none. The output filter is decided there: a line lifts
+    the white level a baseline fits to the record (a deficit near Nyquist that is none), and
+    a biquad's resonance takes a line for its peak. The grid the samples sit on is the
+    record's (the lines' removal takes the samples off it)."""
+    data = context.data
+    lines = SpectralLines.find(context.clean, data.rate_hz)
+    if not lines.coherent:
+        return context
+    values = lines.removed(context.clean)
+    free = Context.of(eqx.tree_at(lambda d: d.values, data, values), values, values)
+    free.lsb = context.lsb
+    return free
+
+
 def decide_output_filter(context: Context, baseline: tuple[str, ...]):
-    """The sensor's output filter, when the baseline's spectrum misfits: the shape (one-tap,
+    """The sensor's output filter, when the ``baseline`` fitted to ``context`` (the record
+    less its lines, :func:`_less_lines`) misses power near Nyquist: the shape (one-tap,
     decimation, Butterworth, biquad) the record holds decisive evidence for, chosen by Laplace
     evidence among every stationary term (:func:`select_noise_terms`), with its MAP
-    parameters and their Laplace 90 % intervals; None when no shape is decisive. Its
-    shape is then fixed for the search (its uncertainty is second order for the effects that
-    follow)."""
+    parameters and their Laplace 90 % intervals; None when there is no deficit or no shape is
+    decisive. Its shape is then fixed for the search (its uncertainty is second order for the
+    effects that follow)."""
     data = context.data
+    fit = fit_model(context, ModelSpec.from_names(baseline))
+    if not _high_band_deficit([spectrum_check(fit.design.summary, *bin_ratios(fit))], data.rate_hz):
+        return None
     values = context.clean
     allan = allan_deviation(values, data.rate_hz, "octave")
     selection = select_noise_terms(

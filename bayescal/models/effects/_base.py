@@ -34,6 +34,11 @@ GRID_POINTS = 6
 PARABOLIC_STEPS = 3
 """Refinements of a searched time constant by a parabola through the best score and its two
 neighbours (in log time constant), after the grid and its midpoints."""
+SHORTEST_DECAY_S = 5.0
+"""The shortest time constant a search looks at by default, s (a warm-up decays over
+minutes; one over seconds is lost in the power-on). A term whose time constant can be as
+short as a few tenths of a second (a Gauss-Markov bias) searches from a few samples
+instead."""
 SEARCHED_VALUES = 2 * GRID_POINTS - 1 + PARABOLIC_STEPS
 """Values a time-constant search chooses among: with a uniform prior over them, the marginal
 likelihood is at least the best one's divided by their number."""
@@ -49,9 +54,10 @@ class Search(Protocol):
     def fit(self, spec):
         """The MAP fit of model ``spec``."""
 
-    def search_time(self, make_spec, key: str):
-        """The best fit over a searched time constant: (fit, search record); None when the
-        record is too short to search one (its third no longer than the shortest)."""
+    def search_time(self, make_spec, key: str, shortest_s: float = SHORTEST_DECAY_S):
+        """The best fit over a searched time constant from ``shortest_s`` (s; never below 20
+        samples) up: (fit, search record); None when the record is too short to search one
+        (its third no longer than the shortest)."""
 
     def line_frequency(self, fit) -> float:
         """The frequency of the strongest spectral line the fit leaves in its residual."""

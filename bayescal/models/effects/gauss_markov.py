@@ -123,8 +123,12 @@ class GaussMarkov(NoiseTerm):
     def propose(cls, search, current):
         if current.spec.has(cls.name):
             return None
+        # From a few samples up: a bias correlated over a fraction of a second is this
+        # term's, not a filter's or flicker's.
         return search.search_time(
-            lambda time_constant: current.spec.with_effect(cls(time_constant)), cls.name
+            lambda time_constant: current.spec.with_effect(cls(time_constant)),
+            cls.name,
+            shortest_s=0.0,
         )
 
     def describe(self, finding, posterior, search) -> dict:

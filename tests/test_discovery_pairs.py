@@ -1,0 +1,65 @@
+"""A small seeded version of ``benchmarks/discovery_pairs.py``: its records hold what they
+say (a grid, a filtered line), discovery names such a pair exactly on a short record, and the
+hit rates' bounds are Clopper-Pearson's."""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+
+def _load_pairs():
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "discovery_pairs.py"
+    spec = importlib.util.spec_from_file_location("discovery_pairs", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+pairs = _load_pairs()
+
+
+def test_each_pair_is_simulated_with_what_it_names():
+    """Every pair simulates a record of the asked length at 50 Hz; the quantized one sits on
+    a grid (discovery's evidence for it), the filtered one has the one-tap filter's lag-one
+    autocorrelation F / (1 + F^2) >= 0.27 (F >= 0.3) where white noise has none."""
+    for pair in pairs.PAIRS:
+        values = pairs.simulate(pair, np.random.default_rng(1), 1.0)
+        assert values.size == 60 * pairs.RATE and np.all(np.isfinite(values))
+    grid = pairs.simulate("quantization+white", np.random.default_rng(2), 1.0)
+    assert np.unique(np.round(np.diff(np.unique(grid)), 12)).size <= 3
+    filtered = pairs.simulate("sinusoid+output_filter", np.random.default_rng(3), 2.0)
+    increments = filtered - filtered.mean()
+    assert np.corrcoef(increments[:-1], increments[1:])[0, 1] > 0.2
+
+
+def test_a_quantized_record_is_named_exactly():
+    """``quantization+white`` on a 2-minute record (seed 0): discovery names quantization
+    alone — a hit as the benchmark scores it."""
+    result = pairs.run(("quantization+white", 0, 2.0))
+    assert result["found"] == ["quantization"] and result["hit"]
+
+
+def test_bounds_are_clopper_pearson():
+    """The 90 % bounds: 0 of n has lower bound 0 and upper 1 - 0.05^(1/n); n of n the mirror;
+    5 of 10 is symmetric about 0.5 (0.22-0.78, the exact beta quantiles)."""
+    assert pairs.bounds(0, 10) == pytest.approx((0.0, 1 - 0.05 ** (1 / 10)))
+    assert pairs.bounds(10, 10) == pytest.approx((0.05 ** (1 / 10), 1.0))
+    low, high = pairs.bounds(5, 10)
+    assert low == pytest.approx(1 - high) and low == pytest.approx(0.2224, abs=1e-3)
+
+
+def test_the_table_counts_hits_and_names_the_misses():
+    """Two records of a pair, one hit and one miss named rate_random_walk: 1/2 and the
+    miss's names."""
+    results = [
+        {
+            "pair": "gauss_markov+rate_random_walk",
+            "found": ["gauss_markov", "rate_random_walk"],
+            "hit": True,
+        },
+        {"pair": "gauss_markov+rate_random_walk", "found": ["rate_random_walk"], "hit": False},
+    ]
+    (line,) = pairs.table(results)
+    assert "1/2" in line and "rate_random_walk x1" in line

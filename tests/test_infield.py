@@ -358,3 +358,39 @@ def test_a_wander_that_is_not_positive_is_refused(old):
     for wander in ((0.0, 20.0), (0.5, -1.0), "x"):
         with pytest.raises(bc.InputError, match="wander"):
             bc.infield_update(park.recording, old, latitude=45.0, align=(0, 300), wander=wander)
+
+
+def test_a_tactical_taxi_finds_its_legs_through_a_heading_error_of_degrees(old, monkeypatch):
+    """The benchmark's tactical case (benchmarks/infield_taxi.py --tactical, seed 500, 10 Hz):
+    gyros of ARW 0.05 deg/sqrt(h) aged by 4 sd of a calibration 10 times looser, so
+    gyrocompassing leaves the heading more than 1 deg off (1.5 deg), beyond the legs' tolerance
+    about the park's own prediction of the track. The first search for the legs allows for the
+    park's heading sd and the taxi's smoother relinearizes: both legs are found (before, none
+    was, and the heading's interval missed the truth by 2.9 sd) and the heading error holds the
+    truth within 3.3 posterior sd (a 0.1 % miss for a correct posterior)."""
+    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    from infield_taxi import LEGS, TACTICAL_GYRO, tactical
+
+    rate, calibrations = 10.0, tactical(old)
+    taxi = bc.Taxi(legs=LEGS, speed=10.0)
+    park = bc.simulate_park(
+        calibrations, aging=4.0, rate_hz=rate, taxi=taxi, gyro_noise=TACTICAL_GYRO, seed=500
+    )
+    park_s = park.truth["park_s"]
+    end = park.recording.columns["time"][-1] + 1 / rate
+    result = bc.infield_update(
+        park.recording,
+        calibrations,
+        latitude=45.0,
+        align=(0, park_s),
+        taxi=(park_s, end),
+        track_heading=[heading for heading, _ in LEGS],
+        seed=500,
+    ).check()
+    coarse = result.alignment["coarse_attitude_deg"]["heading"]
+    assert abs(coarse - LEGS[0][0]) > 1.0
+    assert min(result.taxi["steps_on_legs"]) > 100
+    computed = result.alignment["final_attitude_deg"]["heading"]
+    true_heading = (computed - park.truth["trajectory"]["heading"][-1] + 180) % 360 - 180
+    heading = result.heading_error
+    assert abs(heading["mean"] - true_heading) < 3.3 * heading["sd"]

@@ -69,7 +69,13 @@ from ._error_model import (
 from ._frames import dcm_from_euler, euler_from_dcm, skew
 from ._kalman import StateSpace, kalman_filter, rts_smoother
 from ._strapdown import Trajectory, mechanize
-from ._taxi import TaxiReference, cross_track_row, leg_steps, wander_model
+from ._taxi import (
+    LEG_TOLERANCE_DEG,
+    TaxiReference,
+    cross_track_row,
+    leg_steps,
+    wander_model,
+)
 
 STEP_S = 1.0
 """Seconds between the velocity measurements of the fine alignment."""
@@ -85,9 +91,20 @@ estimates under 1 % against 0.1 mm/s (benchmarks/infield_alignment.py)."""
 TILT_PRIOR = 1e-3
 """sd of the coarse alignment's level tilt, rad (it is pinned at once by the data with the
 accelerometer bias)."""
-HEADING_PRIOR = 1e-2
-"""sd of the coarse alignment's heading error, rad: gyrocompassing with a bias of a few
-0.01 deg/h leaves a few mrad; the east bias level and the heading are then one quantity."""
+HEADING_PRIOR = 0.1
+"""sd of the coarse alignment's heading error, rad. At rest the east bias level and the heading
+are one quantity, and gyrocompassing leaves the heading off by the east bias over the Earth
+rate's horizontal part: a few mrad at navigation grade, but 1 deg/h (a tactical gyro aged by a
+few of its calibration's sd) leaves 5 deg at 45 deg latitude. The coarse heading is where the
+filter is linearized, not information: this prior is wide enough that the east level's prior,
+not it, bounds the heading at rest (at 0.01 rad the tactical park's heading intervals covered
+38 %, benchmarks/infield_taxi.py --tactical), and small enough for the small-angle model."""
+LEG_SIGMAS = 3.0
+"""The first search for the taxi's legs allows the park's heading error this many of its sd
+beyond LEG_TOLERANCE_DEG while no leg has been found (:func:`fine_alignment`)."""
+RELINEARIZATIONS = 4
+"""At most this many smoother runs find the taxi's legs and linearize the next model, the first
+without the taxi's measurements (:func:`fine_alignment`)."""
 DRIFT_PRIOR_SCALE = 10.0
 """The scale of the half-Cauchy prior of the aging scale s, in the calibrations' sd of c_0."""
 DRIFT_PRIOR_CUT = 1000.0
@@ -294,14 +311,18 @@ def _measurements(layout: Layout, velocity, correction, park_steps: int, legs, t
     return observation, measured
 
 
-def _velocity_error(model: "AlignmentModel", drift: float, velocity) -> np.ndarray:
+def _velocity_error(model: "AlignmentModel", drift: float, velocity):
     """The smoothed velocity error, computed minus true (north, east, down; m/s), at every
-    step: delta v + v x phi of the modified phi-angle model (:mod:`._error_model`)."""
-    means, _ = model.smooth(model.filter(drift))
-    states = np.asarray(means) * np.asarray(model.scale)
+    step: delta v + v x phi of the modified phi-angle model (:mod:`._error_model`); and the
+    smoothed sd of phi_D (the heading error's, deg) at every step."""
+    means, covariances = model.smooth(model.filter(drift))
+    scale = np.asarray(model.scale)
+    states = np.asarray(means) * scale
     error = np.zeros((states.shape[0], 3))
     error[:, :2] = states[:, VELOCITY]
-    return error + np.cross(velocity, states[:, TILT])
+    down = TILT.start + 2
+    heading_sd = np.degrees(np.sqrt(np.asarray(covariances)[:, down, down]) * scale[down])
+    return error + np.cross(velocity, states[:, TILT]), heading_sd
 
 
 def white_noise_density(values, rate_hz: float) -> np.ndarray:
@@ -483,11 +504,25 @@ def fine_alignment(
         # Mechanized freely from the coarse alignment, the computed velocity carries the park's
         # errors (the Schuler loop's, up to m/s) into the taxi: the legs are found, and the
         # cross-track rows and the error model linearized, on the velocity less its error as
-        # the park predicts it (the filter and smoother without the taxi's measurements).
-        correction = _velocity_error(model, reference_drift, trajectory.velocity[steps])
-        legs = leg_steps(times, trajectory.velocity[steps] - correction, taxi.headings_deg)
-        legs[steps < taxi.start_sample] = -1
-        model = assemble(correction, legs)
+        # the smoother predicts it. The park alone predicts the heading error no better than
+        # the east bias level's prior allows (degrees at tactical grade): the first legs are
+        # found within LEG_SIGMAS of its sd beyond LEG_TOLERANCE_DEG, else a track that is off
+        # by the heading error itself would lie off every leg, or on a leg only where the
+        # wander happens to cancel it (the steps chosen by their own cross-track velocity, the
+        # heading pulled towards zero). The taxi's smoother then relinearizes, and the legs are
+        # found again within LEG_TOLERANCE_DEG, until they no longer change.
+        velocity = trajectory.velocity[steps]
+        for _ in range(RELINEARIZATIONS):
+            correction, heading_sd = _velocity_error(model, reference_drift, velocity)
+            widen = LEG_SIGMAS * heading_sd if (legs < 0).all() else 0.0
+            found = leg_steps(
+                times, velocity - correction, taxi.headings_deg, LEG_TOLERANCE_DEG + widen
+            )
+            found[steps < taxi.start_sample] = -1
+            if np.array_equal(found, legs):
+                break
+            legs = found
+            model = assemble(correction, legs)
     return FineAlignment(
         model=model,
         layout=layout,

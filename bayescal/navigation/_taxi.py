@@ -66,21 +66,19 @@ def wrap_deg(angle):
     return -((-(np.asarray(angle, dtype=float) + 180.0)) % 360.0) + 180.0
 
 
-def leg_steps(times, velocity, headings_deg) -> np.ndarray:
+def leg_steps(times, velocity, headings_deg, tolerance_deg=LEG_TOLERANCE_DEG) -> np.ndarray:
     """Which leg each filter step lies on: the index into ``headings_deg`` (the known track
     headings, deg), or -1. ``times`` (s) and ``velocity`` (K, 2 or 3: the computed north and
     east velocity, m/s) at the steps. A step is on leg i when the computed speed is at least
-    MIN_TRACK_SPEED and the computed track is within LEG_TOLERANCE_DEG of heading i at it and
-    at every step within LEG_MARGIN_S of it."""
+    MIN_TRACK_SPEED and the computed track is within ``tolerance_deg`` (deg; one, or one per
+    step) of heading i at it and at every step within LEG_MARGIN_S of it."""
     times = np.asarray(times, dtype=float)
     velocity = np.asarray(velocity, dtype=float)
     speed = np.hypot(velocity[:, 0], velocity[:, 1])
     track = np.degrees(np.arctan2(velocity[:, 1], velocity[:, 0]))
     found = np.full(times.size, -1)
     for leg, heading in enumerate(headings_deg):
-        close = (np.abs(wrap_deg(track - heading)) <= LEG_TOLERANCE_DEG) & (
-            speed >= MIN_TRACK_SPEED
-        )
+        close = (np.abs(wrap_deg(track - heading)) <= tolerance_deg) & (speed >= MIN_TRACK_SPEED)
         for k in np.flatnonzero(close & (found < 0)):
             near = np.abs(times - times[k]) <= LEG_MARGIN_S
             if close[near].all():

@@ -136,6 +136,11 @@ class SearchResult(eqx.Module):
     withdrawn: tuple = ()
     """Findings the search accepted and then withdrew: a check of their band still failed
     with them in the model (:func:`withdrawn_findings`)."""
+    disagreeing: tuple = ()
+    """Findings left out of the model because their evidence disagrees with itself: a
+    decisive log Bayes factor (from elsewhere than the fits' shared likelihood: an output
+    filter's Laplace evidence) beside a negative ELPD gain. Not named; their mismatch is
+    reported unexplained with both numbers."""
 
 
 def check_band(check: dict, rate_hz: float) -> str | None:
@@ -228,7 +233,7 @@ def search_effects(
     if burst or outliers:
         context = Context.of(data, unclipped, clean)
         baseline_fit = fit_model(context, ModelSpec.from_names(baseline))
-    context, current, findings = _decided_before_search(
+    context, current, findings, disagreeing = _decided_before_search(
         context, baseline_fit, baseline, baseline_checks, saturation, outliers, burst
     )
     checks = baseline_checks if not findings else run_checks(current, data)
@@ -267,6 +272,7 @@ def search_effects(
         undecided=undecided,
         saturation=saturation,
         withdrawn=tuple(withdrawn),
+        disagreeing=tuple(disagreeing),
     )
 
 
@@ -328,13 +334,14 @@ def _burst(checks: list[dict], data, values: np.ndarray, baseline) -> tuple | No
 
 def _decided_before_search(
     context: Context, current: ModelFit, baseline, baseline_checks, saturation, outliers, burst
-) -> tuple[Context, ModelFit, list]:
+) -> tuple[Context, ModelFit, list, list]:
     """The effects named before the search: clipping, a noise burst and glitches (from their
     scans), the
     grid the samples sit on, and the output filter when the baseline misses power near
-    Nyquist. Returns the context (with the filter, if one was decided), the model with them
-    and their findings."""
-    findings = []
+    Nyquist. Returns the context (with the filter, if one was decided), the model with them,
+    their findings, and the filter's finding where its decisive evidence disagrees with its
+    ELPD gain (then left out of the model: :attr:`SearchResult.disagreeing`)."""
+    findings, disagreeing = [], []
     burst_effect, burst_scan = burst or (None, None)
     for effect, scan in (
         (Saturation(), saturation),
@@ -361,12 +368,19 @@ def _decided_before_search(
         decided = decide_output_filter(context, baseline)
         if decided is not None:
             effect, log_bayes_factor, record = decided
-            context = context.with_lowpass(effect)  # every model from here on sees the filter
-            fit = fit_model(context, current.spec)
+            filtered = context.with_lowpass(effect)
+            fit = fit_model(filtered, current.spec)
             gain, gain_se = _elpd_difference(fit, current)
-            findings.append(Finding(effect, fit, log_bayes_factor, gain, gain_se, (), record))
-            current = fit
-    return context, current, findings
+            finding = Finding(effect, fit, log_bayes_factor, gain, gain_se, (), record)
+            # Decisive Laplace evidence with worse predictions is no evidence: a name needs
+            # both (the filter's evidence does not come from the search's likelihood).
+            if gain < 0:
+                disagreeing.append(finding)
+            else:
+                context = filtered  # every model from here on sees the filter
+                findings.append(finding)
+                current = fit
+    return context, current, findings, disagreeing
 
 
 def _search(context: Context, current: ModelFit, checks, max_effects: int, report):

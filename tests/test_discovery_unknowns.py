@@ -1,0 +1,32 @@
+"""Discovery's honest "unexplained" (issue 33 item 2) on seeded simulations: a finding whose
+log Bayes factor and ELPD gain disagree is not named, its mismatch is reported unexplained
+with both numbers, and the run fails its checks (the command line's exit 1)."""
+
+import numpy as np
+
+import bayescal as bc
+from bayescal.inference import _discovery_search
+from bayescal.models.effects.output_filter import OutputFilter
+
+WHITE_SD = 0.05  # deg/s per sample
+
+
+def test_a_filter_whose_evidence_disagrees_with_its_predictions_is_not_named(monkeypatch):
+    """White noise at 100 Hz, with the filter decision made to return a strong one-tap
+    low-pass (coefficient 0.8) at log Bayes factor +50: the record has no filter, so the
+    model with it predicts far worse (negative ELPD gain). Discovery must leave it out of
+    the named effects and the model, report both numbers unexplained, and fail."""
+    values = WHITE_SD * np.random.default_rng(1).standard_normal(2**15)
+    forced = (OutputFilter(coefficient=0.8), 50.0, {"parameters": {}, "shapes": []})
+    monkeypatch.setattr(_discovery_search, "_high_band_deficit", lambda checks, rate: True)
+    monkeypatch.setattr(_discovery_search, "decide_output_filter", lambda context, base: forced)
+    found = bc.discover(values, 100.0, unit="deg/s", posterior=False, seed=1)
+    assert "output_filter" not in {effect.name for effect in found.effects}
+    assert "output_filter" not in found.final_terms
+    (entry,) = found.unexplained["disagreeing"]
+    assert entry["name"] == "output_filter"
+    assert entry["log_bayes_factor"] == 50.0
+    assert entry["delta_elpd"] < 0
+    assert "+50.0" in found.unexplained["explanation"]
+    assert any("output_filter" in failure for failure in found.failures)
+    assert not found.passed

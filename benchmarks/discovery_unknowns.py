@@ -3,10 +3,12 @@ unexplained, at its time or band, with no false name; catalogue effects alone an
 combinations that went wrong (a weak line, a short-tau Gauss-Markov, Gauss-Markov beside a
 random walk) named exactly; no false alarm on clean records.
 
-    python benchmarks/discovery_unknowns.py [--seed 0] [--scale 1]
+    python benchmarks/discovery_unknowns.py [--seed 0] [--scale 1] [--kinds ...] [--workers 1]
 
 Each record is a static gyro, white noise of 0.05 deg/s per sample, 50 or 100 Hz, 10 to 20
-minutes (``--scale`` multiplies the counts of records). The kinds:
+minutes (``--scale`` multiplies the counts of records; ``--kinds`` runs only those kinds).
+Each record runs in a fresh process (``--workers`` at once), so memory is that of one record
+per worker. The kinds:
 
 - out of the catalogue (each must leave every name out and be reported unexplained where it
   is): a scale factor that changes by 3-6 % at a random time under a slow input ramp that
@@ -227,6 +229,7 @@ def main() -> int:
     parser.add_argument(
         "--kinds", nargs="*", default=None, help="run only the records of these kinds"
     )
+    parser.add_argument("--workers", type=int, default=1, help="records run at once")
     args = parser.parse_args()
     kinds = plan(args.scale)
     jobs = [
@@ -239,7 +242,7 @@ def main() -> int:
     # One record per fresh process: JAX's compilation caches and the fits' arrays of one
     # record are freed with its process, so memory stays that of one record.
     context = multiprocessing.get_context("spawn")
-    with context.Pool(1, maxtasksperchild=1) as pool:
+    with context.Pool(args.workers, maxtasksperchild=1) as pool:
         outcomes = pool.imap(_run, jobs)
         for (kind, seed), result in zip(jobs, outcomes, strict=True):
             index = seed - args.seed * 10_000

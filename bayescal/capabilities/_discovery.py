@@ -311,9 +311,7 @@ def describe(result: SearchResult, posterior: FinalPosterior | None) -> Discover
         if not check["passed"] and check["name"] not in UNMODELLED_CHECKS
     ]
     unexplained = (
-        unexplained_of(result, still_failing)
-        if still_failing or result.disagreeing
-        else None
+        unexplained_of(result, still_failing) if still_failing or result.disagreeing else None
     )
     data = result.data
     # The grid's rounding and the output filter are in every model without being its terms.

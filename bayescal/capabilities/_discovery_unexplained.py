@@ -259,13 +259,27 @@ def unexplained_of(result: SearchResult, still_failing: list[str]) -> dict:
             for finding in result.disagreeing
         ]
     if result.undecided:
-        name, score = result.undecided
+        name, score, *against = result.undecided
         unexplained["best_candidate"] = name
         unexplained["log_bayes_factor"] = score
-        told.append(
-            f"the term that would explain it best, {name}, is not decisive (log Bayes "
-            f"factor {score:.1f})"
-        )
+        if against:
+            located = against[0]
+            unexplained["against"] = {
+                "shape": located.shape,
+                "time_s": located.start_s
+                if located.shape == "drift"
+                else [located.start_s, located.stop_s],
+            }
+            told.append(
+                f"{name} absorbs it with decisive evidence against the model without it, but "
+                f"not against the {located.shape} the level scan located (log Bayes factor "
+                f"{score:.1f} against it): a one-off departure there, not a {name}"
+            )
+        else:
+            told.append(
+                f"the term that would explain it best, {name}, is not decisive (log Bayes "
+                f"factor {score:.1f})"
+            )
     advice = "; ".join(dict.fromkeys(entry["advice"] for entry in mismatches))
     unexplained["explanation"] = (
         f"a mismatch no catalogue entry explains remains ({', '.join(still_failing) or '-'}; "

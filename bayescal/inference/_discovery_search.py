@@ -63,6 +63,7 @@ from ..models.effects.quantization import Quantization
 from ..models.effects.saturation import Saturation, impute_clipped, saturation_scan
 from ._checks import CHECK_LEVEL, run_checks
 from ._discovery_fit import Context, DiscoveryData, fit_model
+from ._located import located_alternative
 from ._priors import default_prior
 from ._scans import variance_scan
 from ._selection import select_noise_terms
@@ -131,7 +132,9 @@ class SearchResult(eqx.Module):
     outliers: dict | None
     undecided: tuple = ()
     """(name, log Bayes factor) of the best candidate when the search stopped with a check
-    still failing because no term was decisive; empty otherwise."""
+    still failing because no term was decisive; with a third item, the located departure
+    (:class:`~bayescal.inference._located.LocatedDeparture`) it was not decisive against
+    (the log Bayes factor then against that); empty otherwise."""
     saturation: dict | None = None
     withdrawn: tuple = ()
     """Findings the search accepted and then withdrew: a check of their band still failed
@@ -239,18 +242,26 @@ def search_effects(
     checks = baseline_checks if not findings else run_checks(current, data)
     before_search = current
     current, checks, searched, undecided = _search(context, current, checks, max_effects, report)
-    passing = {check["name"] for check in checks if check["passed"]}
+    # Where a name lost to a located departure (_located), the findings are judged on what
+    # is left beside that departure (it is reported unexplained, not held against them).
+    located = undecided[2:]
+    judged = (
+        run_checks(fit_model(context, current.spec.with_effect(*located)), data)
+        if located
+        else checks
+    )
+    passing = {check["name"] for check in judged if check["passed"]}
 
     def answers(finding: Finding) -> bool:
         """Whether the final model without ``finding`` fails a check that passes with it."""
         spec = before_search.spec
-        for other in searched:
+        for other in (*searched, *located):
             if other is not finding:
-                spec = spec.with_effect(other.effect)
+                spec = spec.with_effect(getattr(other, "effect", other))
         without = run_checks(fit_model(context, spec), data)
         return any(not check["passed"] for check in without if check["name"] in passing)
 
-    withdrawn = withdrawn_findings(searched, checks, data, answers)
+    withdrawn = withdrawn_findings(searched, judged, data, answers)
     if withdrawn:
         report(f"withdrawing {', '.join(f.name for f in withdrawn)}: checks still fail there")
         searched = [finding for finding in searched if finding not in withdrawn]
@@ -402,6 +413,14 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
         log_bayes_factor = fit.schwarz - current.schwarz
         if not log_bayes_factor > DECISIVE_LOG_BAYES_FACTOR:
             undecided = (name, float(log_bayes_factor))
+            break
+        located = (
+            located_alternative(context, current) if fit.spec.effects[-1].band == "low" else None
+        )
+        if located is not None and not fit.schwarz - located.schwarz > DECISIVE_LOG_BAYES_FACTOR:
+            # A slow term that absorbs one located departure is the nearest name, not the
+            # physics: it must be decisive against the departure itself (module _located).
+            undecided = (name, float(fit.schwarz - located.schwarz), located.spec.effects[-1])
             break
         gain, gain_se = _elpd_difference(fit, current)
         runner_up = (

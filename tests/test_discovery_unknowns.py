@@ -34,7 +34,7 @@ def test_a_filter_whose_evidence_disagrees_with_its_predictions_is_not_named(mon
 
 def test_a_scale_factor_change_under_a_ramp_is_located_and_not_named():
     """A slow input ramp (15 sample sd over the record) through zero at 190 s, seen by a
-    scale factor that grows by 5 % there: the slope kinks. 2^14 samples at 50 Hz (328 s).
+    scale factor that grows by 10 % there: the slope kinks. 2^14 samples at 50 Hz (328 s).
     The ramp may be named; the kink is no catalogue effect's, so a slow term that absorbs it
     (a random walk, a warm-up) must lose to the drift the level scan locates, and the
     mismatch is reported unexplained as a drift within 3 % of the record (10 s) of 190 s."""
@@ -42,7 +42,7 @@ def test_a_scale_factor_change_under_a_ramp_is_located_and_not_named():
     n, rate = 2**14, 50.0
     t = np.arange(n) / rate
     ramp = 15 * WHITE_SD / t[-1]
-    values = WHITE_SD * rng.standard_normal(n) + ramp * (t - 190.0) * (1 + 0.05 * (t >= 190.0))
+    values = WHITE_SD * rng.standard_normal(n) + ramp * (t - 190.0) * (1 + 0.10 * (t >= 190.0))
     found = bc.discover(values, rate, unit="deg/s", posterior=False, seed=3)
     assert {effect.name for effect in found.effects} <= {"rate_ramp"}
     (scan,) = [m for m in found.unexplained["mismatches"] if m["check"] == "level_scan"]

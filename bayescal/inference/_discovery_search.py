@@ -178,8 +178,9 @@ def withdrawn_findings(
     power departs over time (a variance that changes is not a stationary term's) or (for a
     term not tied to a covariate) when any check of its band fails, unless the term alone
     ``answers`` a check (without it, a check that passes would fail: it explains a mismatch
-    of its own, and what is left beside it is reported unexplained). A catalogue entry that
-    absorbs part of a mismatch it does not explain is the nearest wrong name."""
+    of its own, and what is left beside it is reported unexplained); and, where any located
+    check still fails, any term that answers none. A catalogue entry that absorbs part of a
+    mismatch it does not explain is the nearest wrong name."""
     failing = {check["name"]: check for check in checks if not check["passed"]}
     bands = {check_band(check, data.rate_hz) for check in failing.values()} - {None}
     withdrawn = []
@@ -192,7 +193,10 @@ def withdrawn_findings(
         if own is not None:
             unexplained = not effect.apart(own, data.duration_s)
         else:
-            unexplained = (in_band or stationary) and not answers(finding)
+            # Beside a mismatch left unexplained, every name must carry its own weight: a
+            # check that passes only with it (a name that explains no check of its own is
+            # the nearest catalogue entry absorbing part of that mismatch).
+            unexplained = (in_band or stationary or bool(bands)) and not answers(finding)
         if unexplained:
             withdrawn.append(finding)
     return withdrawn

@@ -418,9 +418,7 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
         if not log_bayes_factor > DECISIVE_LOG_BAYES_FACTOR:
             undecided = (name, float(log_bayes_factor))
             break
-        located = (
-            located_alternative(context, current) if fit.spec.effects[-1].band == "low" else None
-        )
+        located = located_alternative(context, current, fit.spec.effects[-1])
         if located is not None and not fit.schwarz - located.schwarz > DECISIVE_LOG_BAYES_FACTOR:
             # A slow term that absorbs one located departure is the nearest name, not the
             # physics: it must be decisive against the departure itself (module _located).

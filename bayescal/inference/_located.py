@@ -26,6 +26,9 @@ from ._scans import level_scan
 
 UNNAMED_SHAPES = ("drift", "stretch")
 """The level scan's shapes no catalogue effect is (a step is ``bias_step``)."""
+SHAPE_EFFECTS = ("bias_step", "rate_ramp")
+"""Catalogue effects that are themselves shapes of the level scan (a step; a drift from the
+record's start): never held against a located departure."""
 
 
 class LocatedDeparture(RegressionTerm):
@@ -65,10 +68,14 @@ class LocatedDeparture(RegressionTerm):
         return [inside.astype(float)], [1.0], [data.unit]
 
 
-def located_alternative(search, current: ModelFit) -> ModelFit | None:
+def located_alternative(search, current: ModelFit, candidate) -> ModelFit | None:
     """``current`` with the strongest departure its level scan locates, when that is a drift
-    that starts late or a stretch (:data:`UNNAMED_SHAPES`), taken out as it is; None when the
-    scan passes or its strongest departure is a step."""
+    that starts late or a stretch (:data:`UNNAMED_SHAPES`), taken out as it is: what the
+    slow catalogue effect ``candidate`` must be decisive against. None when the scan passes,
+    its strongest departure is a step or a drift from the start, or ``candidate`` is not a
+    slow effect or is itself a shape of the scan (:data:`SHAPE_EFFECTS`)."""
+    if candidate.band != "low" or candidate.name in SHAPE_EFFECTS:
+        return None
     data = search.data
     scan = level_scan(current, data.rate_hz, data.unit)
     if scan["p_value"] >= CHECK_LEVEL or not scan["location"].get("events"):

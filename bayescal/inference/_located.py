@@ -9,9 +9,10 @@ without it, and then leave every check passing, because its predictive distribut
 such a departure anywhere. Its name is then the nearest catalogue entry, not the physics:
 the name must also be decisive against the departure itself, located where the scan put it
 (paying the log of the number of shapes the scan tried, as any searched parameter does). A
-step has a catalogue name of its own (``bias_step``), and so has a drift from the record's
-start (``rate_ramp``): neither is an alternative. The findings are then judged (withdrawn or
-kept) on the model with the located departure taken out, which is reported unexplained.
+step has a catalogue name of its own (``bias_step``), and so have a drift from the record's
+start (``rate_ramp``) and levels that switch (``random_telegraph``): none is an alternative.
+The findings are then judged (withdrawn or kept) on the model with the located departure taken
+out, which is reported unexplained.
 """
 
 import math
@@ -26,9 +27,9 @@ from ._scans import level_scan
 
 UNNAMED_SHAPES = ("drift", "stretch")
 """The level scan's shapes no catalogue effect is (a step is ``bias_step``)."""
-SHAPE_EFFECTS = ("bias_step", "rate_ramp")
+SHAPE_EFFECTS = ("bias_step", "rate_ramp", "random_telegraph")
 """Catalogue effects that are themselves shapes of the level scan (a step; a drift from the
-record's start): never held against a located departure."""
+record's start; levels that switch): never held against a located departure."""
 
 
 class LocatedDeparture(RegressionTerm):

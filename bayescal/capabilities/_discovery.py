@@ -148,6 +148,12 @@ class Discovery:
         failures = []
         if self.posterior is not None and not self.posterior.diagnostics.passed:
             failures += [f"the final posterior: {f}" for f in self.posterior.diagnostics.failures]
+        for finding in self.result.disagreeing:
+            failures.append(
+                f"{finding.name}: log Bayes factor {finding.log_bayes_factor:.1f} is decisive "
+                f"but its ELPD gain is {finding.delta_elpd:.1f} nats: the evidence disagrees "
+                "with itself, so it is not named and its mismatch is reported unexplained"
+            )
         for effect in self.effects:
             if effect.evidence.get("consistent") is False:
                 failures.append(
@@ -304,7 +310,9 @@ def describe(result: SearchResult, posterior: FinalPosterior | None) -> Discover
         for check in result.final_checks
         if not check["passed"] and check["name"] not in UNMODELLED_CHECKS
     ]
-    unexplained = unexplained_of(result, still_failing) if still_failing else None
+    unexplained = (
+        unexplained_of(result, still_failing) if still_failing or result.disagreeing else None
+    )
     data = result.data
     # The grid's rounding and the output filter are in every model without being its terms.
     spec_terms = result.final.spec.terms()

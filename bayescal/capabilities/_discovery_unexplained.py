@@ -222,7 +222,8 @@ def _located_band(checks: list[dict], failing: list[str], rate_hz: float) -> tup
 
 def unexplained_of(result: SearchResult, still_failing: list[str]) -> dict:
     """What the final model leaves unexplained: each failing check located and described
-    (:func:`_mismatch`), the findings withdrawn because they did not explain it, and the
+    (:func:`_mismatch`), the findings withdrawn because they did not explain it, those left
+    out because their log Bayes factor and ELPD gain disagree (both numbers given), and the
     best candidate where none was decisive."""
     data = result.data
     in_time = bool({"level_scan", "variance_scan"} & set(still_failing))
@@ -237,6 +238,9 @@ def unexplained_of(result: SearchResult, still_failing: list[str]) -> dict:
         if check["name"] in still_failing
     ]
     band, where = _located_band(result.final_checks, still_failing, data.rate_hz)
+    if not still_failing:  # only a finding whose evidence disagrees: its band is the place
+        band = result.disagreeing[0].effect.band
+        where = f"where {result.disagreeing[0].name} acts (its evidence disagrees)"
     unexplained = {
         "checks": still_failing,
         "band": band,
@@ -255,17 +259,48 @@ def unexplained_of(result: SearchResult, still_failing: list[str]) -> dict:
             f"{names} absorbed part of it with decisive evidence but left its checks failing: "
             "not named (the nearest catalogue entry is not the physics)"
         )
+    if result.disagreeing:
+        unexplained["disagreeing"] = [
+            {
+                "name": finding.name,
+                "log_bayes_factor": finding.log_bayes_factor,
+                "delta_elpd": finding.delta_elpd,
+                "delta_elpd_se": finding.delta_elpd_se,
+            }
+            for finding in result.disagreeing
+        ]
+        told += [
+            f"{finding.name} had a decisive log Bayes factor ({finding.log_bayes_factor:+.1f}) "
+            f"but predicts worse (ELPD gain {finding.delta_elpd:+.1f} +- "
+            f"{finding.delta_elpd_se:.1f} nats): the evidence disagrees with itself, so it is "
+            "not named"
+            for finding in result.disagreeing
+        ]
     if result.undecided:
-        name, score = result.undecided
+        name, score, *against = result.undecided
         unexplained["best_candidate"] = name
         unexplained["log_bayes_factor"] = score
-        told.append(
-            f"the term that would explain it best, {name}, is not decisive (log Bayes "
-            f"factor {score:.1f})"
-        )
+        if against:
+            located = against[0]
+            unexplained["against"] = {
+                "shape": located.shape,
+                "time_s": located.start_s
+                if located.shape == "drift"
+                else [located.start_s, located.stop_s],
+            }
+            told.append(
+                f"{name} absorbs it with decisive evidence against the model without it, but "
+                f"not against the {located.shape} the level scan located (log Bayes factor "
+                f"{score:.1f} against it): a one-off departure there, not a {name}"
+            )
+        else:
+            told.append(
+                f"the term that would explain it best, {name}, is not decisive (log Bayes "
+                f"factor {score:.1f})"
+            )
     advice = "; ".join(dict.fromkeys(entry["advice"] for entry in mismatches))
     unexplained["explanation"] = (
-        f"a mismatch no catalogue entry explains remains ({', '.join(still_failing)}; "
+        f"a mismatch no catalogue entry explains remains ({', '.join(still_failing) or '-'}; "
         f"{where})" + (": " + "; ".join(told) if told else "") + f". {advice}"
     )
     return unexplained

@@ -6,6 +6,7 @@ filter decided before the search), the MAP fit of one model by its Whittle likel
 the parameters a search located (profile likelihood, delta method, Cramér-Rao).
 """
 
+import itertools
 import math
 
 import equinox as eqx
@@ -152,16 +153,70 @@ class Context:
         """The strongest departure of ``kind`` (a step) the level scan of ``fit`` locates
         beyond its threshold: its time refined to a sample (the CUSUM profile over the two
         blocks either side of it) and the record of the search (the scan's z, the profile's
-        90 % interval); None when the scan passes or locates none of that kind."""
+        90 % interval); None when the scan passes or locates none of that kind. ``kind``
+        ``"switches"``: where the scan locates switching levels, the time of every level
+        change among its departures (steps, and both ends of stretches), each refined so, in
+        order (a tuple), and the record."""
         data = self.data
         scan = level_scan(fit, data.rate_hz, data.unit)
         if scan["p_value"] >= CHECK_LEVEL:
             return None
+        block = scan["location"]["block_s"]
+        if kind == "switches":
+            if scan["location"]["shape"] != "switching levels":
+                return None
+            switches = self._switches(fit, block)
+            if len(switches) < 2:
+                return None
+            return switches, {"scan_z": scan["location"]["z"], "switches": len(switches)}
         events = [event for event in scan["location"]["events"] if event["kind"] == kind]
         if not events:
             return None
-        block = scan["location"]["block_s"] * data.rate_hz
-        centre = round(events[0]["time_s"] * data.rate_hz)
+        time_s, interval = self._refined(fit, events[0]["time_s"], block)
+        return time_s, {"scan_z": events[0]["z"], "time_interval_s": interval}
+
+    def _switches(self, fit: ModelFit, block_s: float) -> tuple[float, ...]:
+        """The times (s) where the residual of ``fit`` switches between two levels: binary
+        segmentation by the CUSUM profile (each cut kept while its log-likelihood gain is
+        decisive beyond the log of the samples it was chosen among, segments no shorter than
+        ``block_s``), the segments' means split in two levels (the split of least
+        within-level variance), the switches where the level changes."""
+        residual = fit.residual
+        size = residual.size
+        sd = float(np.nanstd(np.diff(residual)) / math.sqrt(2))
+        shortest = max(int(block_s * self.data.rate_hz), 2)
+        enough = math.log(size) + math.log(100.0)
+        cuts, pending = [], [(0, size)]
+        while pending:
+            first, last = pending.pop()
+            if last - first < 2 * shortest:
+                continue
+            profile = step_profile(residual, first, last, sd)[shortest - 1 : -shortest + 1]
+            if profile.size == 0 or profile.max() < enough:
+                continue
+            cut = first + shortest + int(np.argmax(profile))
+            cuts.append(cut)
+            pending += [(first, cut), (cut, last)]
+        edges = np.array([0, *sorted(cuts), size])
+        means = np.array([np.nanmean(residual[a:b]) for a, b in itertools.pairwise(edges)])
+        order = np.sort(means)
+        costs = [
+            np.var(order[:k]) * k + np.var(order[k:]) * (order.size - k)
+            for k in range(1, order.size)
+        ]
+        if not costs:
+            return ()
+        split = order[int(np.argmin(costs))]
+        high = means > split
+        changes = np.flatnonzero(high[1:] != high[:-1]) + 1
+        return tuple(float(edges[k] / self.data.rate_hz) for k in changes)
+
+    def _refined(self, fit: ModelFit, time_s: float, block_s: float) -> tuple[float, list]:
+        """A level change located near ``time_s`` put on a sample by the CUSUM profile over
+        the two blocks of ``block_s`` either side, with the profile's 90 % interval (s)."""
+        rate = self.data.rate_hz
+        block = block_s * rate
+        centre = round(time_s * rate)
         first = max(centre - int(2 * block), 0)
         last = min(centre + int(2 * block), fit.residual.size)
         segment = fit.residual[first:last]
@@ -169,11 +224,8 @@ class Context:
         profile = step_profile(fit.residual, first, last, sd)
         best = int(np.argmax(profile))
         inside = np.flatnonzero(profile >= profile[best] - STEP_PROFILE_DROP)
-        to_time = lambda k: float((first + 1 + k) / data.rate_hz)  # noqa: E731
-        return to_time(best), {
-            "scan_z": events[0]["z"],
-            "time_interval_s": [to_time(inside.min()), to_time(inside.max())],
-        }
+        to_time = lambda k: float((first + 1 + k) / rate)  # noqa: E731
+        return to_time(best), [to_time(inside.min()), to_time(inside.max())]
 
     @staticmethod
     def summarize(draws, unit: str) -> dict:

@@ -64,6 +64,7 @@ from ..models.effects.saturation import Saturation, impute_clipped, saturation_s
 from ..models.effects.spectral_lines import SpectralLines
 from ._checks import CHECK_LEVEL, run_checks, spectrum_check
 from ._discovery_fit import Context, DiscoveryData, fit_model
+from ._located import located_alternative
 from ._priors import default_prior
 from ._scans import variance_scan
 from ._selection import select_noise_terms
@@ -132,11 +133,18 @@ class SearchResult(eqx.Module):
     outliers: dict | None
     undecided: tuple = ()
     """(name, log Bayes factor) of the best candidate when the search stopped with a check
-    still failing because no term was decisive; empty otherwise."""
+    still failing because no term was decisive; with a third item, the located departure
+    (:class:`~bayescal.inference._located.LocatedDeparture`) it was not decisive against
+    (the log Bayes factor then against that); empty otherwise."""
     saturation: dict | None = None
     withdrawn: tuple = ()
     """Findings the search accepted and then withdrew: a check of their band still failed
     with them in the model (:func:`withdrawn_findings`)."""
+    disagreeing: tuple = ()
+    """Findings left out of the model because their evidence disagrees with itself: a
+    decisive log Bayes factor (from elsewhere than the fits' shared likelihood: an output
+    filter's Laplace evidence) beside a negative ELPD gain. Not named; their mismatch is
+    reported unexplained with both numbers."""
 
 
 def check_band(check: dict, rate_hz: float) -> str | None:
@@ -171,8 +179,9 @@ def withdrawn_findings(
     power departs over time (a variance that changes is not a stationary term's) or (for a
     term not tied to a covariate) when any check of its band fails, unless the term alone
     ``answers`` a check (without it, a check that passes would fail: it explains a mismatch
-    of its own, and what is left beside it is reported unexplained). A catalogue entry that
-    absorbs part of a mismatch it does not explain is the nearest wrong name."""
+    of its own, and what is left beside it is reported unexplained); and, where any located
+    check still fails, any term that answers none. A catalogue entry that absorbs part of a
+    mismatch it does not explain is the nearest wrong name."""
     failing = {check["name"]: check for check in checks if not check["passed"]}
     bands = {check_band(check, data.rate_hz) for check in failing.values()} - {None}
     withdrawn = []
@@ -185,7 +194,10 @@ def withdrawn_findings(
         if own is not None:
             unexplained = not effect.apart(own, data.duration_s)
         else:
-            unexplained = (in_band or stationary) and not answers(finding)
+            # Beside a mismatch left unexplained, every name must carry its own weight: a
+            # check that passes only with it (a name that explains no check of its own is
+            # the nearest catalogue entry absorbing part of that mismatch).
+            unexplained = (in_band or stationary or bool(bands)) and not answers(finding)
         if unexplained:
             withdrawn.append(finding)
     return withdrawn
@@ -229,24 +241,32 @@ def search_effects(
     if burst or outliers:
         context = Context.of(data, unclipped, clean)
         baseline_fit = fit_model(context, ModelSpec.from_names(baseline))
-    context, current, findings = _decided_before_search(
+    context, current, findings, disagreeing = _decided_before_search(
         context, baseline_fit, baseline, baseline_checks, saturation, outliers, burst
     )
     checks = baseline_checks if not findings else run_checks(current, data)
     before_search = current
     current, checks, searched, undecided = _search(context, current, checks, max_effects, report)
-    passing = {check["name"] for check in checks if check["passed"]}
+    # Where a name lost to a located departure (_located), the findings are judged on what
+    # is left beside that departure (it is reported unexplained, not held against them).
+    located = undecided[2:]
+    judged = (
+        run_checks(fit_model(context, current.spec.with_effect(*located)), data)
+        if located
+        else checks
+    )
+    passing = {check["name"] for check in judged if check["passed"]}
 
     def answers(finding: Finding) -> bool:
         """Whether the final model without ``finding`` fails a check that passes with it."""
         spec = before_search.spec
-        for other in searched:
+        for other in (*searched, *located):
             if other is not finding:
-                spec = spec.with_effect(other.effect)
+                spec = spec.with_effect(getattr(other, "effect", other))
         without = run_checks(fit_model(context, spec), data)
         return any(not check["passed"] for check in without if check["name"] in passing)
 
-    withdrawn = withdrawn_findings(searched, checks, data, answers)
+    withdrawn = withdrawn_findings(searched, judged, data, answers)
     if withdrawn:
         report(f"withdrawing {', '.join(f.name for f in withdrawn)}: checks still fail there")
         searched = [finding for finding in searched if finding not in withdrawn]
@@ -268,6 +288,7 @@ def search_effects(
         undecided=undecided,
         saturation=saturation,
         withdrawn=tuple(withdrawn),
+        disagreeing=tuple(disagreeing),
     )
 
 
@@ -329,13 +350,14 @@ def _burst(checks: list[dict], data, values: np.ndarray, baseline) -> tuple | No
 
 def _decided_before_search(
     context: Context, current: ModelFit, baseline, baseline_checks, saturation, outliers, burst
-) -> tuple[Context, ModelFit, list]:
+) -> tuple[Context, ModelFit, list, list]:
     """The effects named before the search: clipping, a noise burst and glitches (from their
     scans), the
     grid the samples sit on, and the output filter when the baseline misses power near
-    Nyquist. Returns the context (with the filter, if one was decided), the model with them
-    and their findings."""
-    findings = []
+    Nyquist. Returns the context (with the filter, if one was decided), the model with them,
+    their findings, and the filter's finding where its decisive evidence disagrees with its
+    ELPD gain (then left out of the model: :attr:`SearchResult.disagreeing`)."""
+    findings, disagreeing = [], []
     burst_effect, burst_scan = burst or (None, None)
     for effect, scan in (
         (Saturation(), saturation),
@@ -362,12 +384,19 @@ def _decided_before_search(
         decided = decide_output_filter(_less_lines(context), baseline)
         if decided is not None:
             effect, log_bayes_factor, record = decided
-            context = context.with_lowpass(effect)  # every model from here on sees the filter
-            fit = fit_model(context, current.spec)
+            filtered = context.with_lowpass(effect)
+            fit = fit_model(filtered, current.spec)
             gain, gain_se = _elpd_difference(fit, current)
-            findings.append(Finding(effect, fit, log_bayes_factor, gain, gain_se, (), record))
-            current = fit
-    return context, current, findings
+            finding = Finding(effect, fit, log_bayes_factor, gain, gain_se, (), record)
+            # Decisive Laplace evidence with worse predictions is no evidence: a name needs
+            # both (the filter's evidence does not come from the search's likelihood).
+            if gain < 0:
+                disagreeing.append(finding)
+            else:
+                context = filtered  # every model from here on sees the filter
+                findings.append(finding)
+                current = fit
+    return context, current, findings, disagreeing
 
 
 def _search(context: Context, current: ModelFit, checks, max_effects: int, report):
@@ -389,6 +418,12 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
         log_bayes_factor = fit.schwarz - current.schwarz
         if not log_bayes_factor > DECISIVE_LOG_BAYES_FACTOR:
             undecided = (name, float(log_bayes_factor))
+            break
+        located = located_alternative(context, current, fit.spec.effects[-1])
+        if located is not None and not fit.schwarz - located.schwarz > DECISIVE_LOG_BAYES_FACTOR:
+            # A slow term that absorbs one located departure is the nearest name, not the
+            # physics: it must be decisive against the departure itself (module _located).
+            undecided = (name, float(fit.schwarz - located.schwarz), located.spec.effects[-1])
             break
         gain, gain_se = _elpd_difference(fit, current)
         runner_up = (

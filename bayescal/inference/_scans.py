@@ -86,12 +86,14 @@ def level_scan(fit: ModelFit, rate_hz: float, unit: str) -> dict:
     time = (start + stop) / 2 / rate_hz
     means = block_means(residual, start, stop) - fit.noise["R"] * time
     factor = np.linalg.cholesky(block_covariance(fit, start, stop, rate_hz))
-    white_ones = np.linalg.solve(factor, np.ones(blocks))
-    unit_ones = white_ones / np.linalg.norm(white_ones)
+    # The model's free level terms are taken out: the bias, and the ramp where the model has
+    # one (its slope is fitted, so a departure the scan reports is one beyond it).
+    fitted = [np.ones(blocks)] + ([time - time.mean()] if fit.spec.has("rate_ramp") else [])
+    basis, _ = np.linalg.qr(np.linalg.solve(factor, np.array(fitted).T))
 
-    def projected(matrix):  # whitened, with the bias (the constant) taken out
+    def projected(matrix):  # whitened, with the model's free level terms taken out
         white = np.linalg.solve(factor, matrix)
-        return white - np.outer(unit_ones, unit_ones @ white)
+        return white - basis @ (basis.T @ white)
 
     white_means = projected(means[:, None])[:, 0]
     rows, kinds = _level_regressors(blocks)
@@ -119,6 +121,7 @@ def level_scan(fit: ModelFit, rate_hz: float, unit: str) -> dict:
         "location": location,
         "calibration": f"maximum |z| over {z.size} shapes, {SIMULATIONS} simulations from the "
         "fitted model (Bonferroni bound below their reach)",
+        "places": int(z.size),
     }
 
 

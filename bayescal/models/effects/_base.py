@@ -64,7 +64,8 @@ class Search(Protocol):
 
     def level_event(self, fit, kind: str):
         """The time of the strongest departure of ``kind`` (``"step"``) the level scan of
-        the fit locates, and the search's record; None where it locates none."""
+        the fit locates, and the search's record; None where it locates none. For
+        ``"switches"``, the times of the level changes where it locates switching levels."""
 
     def summarize(self, draws, unit: str) -> dict:
         """Mean, sd, 5 % and 95 % quantiles of posterior draws, with the unit."""

@@ -13,6 +13,7 @@ from .noise_burst import NoiseBurst
 from .outliers import Outliers
 from .output_filter import OutputFilter
 from .quantization import Quantization
+from .random_telegraph import RandomTelegraph
 from .rate_ramp import RateRamp
 from .rate_random_walk import RateRandomWalk
 from .saturation import Saturation
@@ -32,6 +33,7 @@ SEARCHED = (
     Sinusoid,
     GSensitivity,
     BiasStep,
+    RandomTelegraph,
 )
 """The effects discovery proposes in each round, in this order."""
 SAMPLE = (Saturation, NoiseBurst, Outliers)

@@ -2,22 +2,11 @@
 say (a grid, a filtered line), discovery names such a pair exactly on a short record, and the
 hit rates' bounds are Clopper-Pearson's."""
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
+from _benchmarks import load_benchmark
 
-
-def _load_pairs():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "discovery_pairs.py"
-    spec = importlib.util.spec_from_file_location("discovery_pairs", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-pairs = _load_pairs()
+pairs = load_benchmark("discovery_pairs")
 
 
 def test_each_pair_is_simulated_with_what_it_names():

@@ -2,26 +2,16 @@
 the suite judges its target (the log Bayes factor a recording can be expected to hold for a
 hidden effect, computed from the truth) against the evidence discovery observes."""
 
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _benchmarks import load_benchmark
 
 import bayescal as bc
 from bayescal.inference._discovery_search import DECISIVE_LOG_BAYES_FACTOR
 
-
-def _load_suite():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "discovery_suite.py"
-    spec = importlib.util.spec_from_file_location("discovery_suite", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-suite = _load_suite()
+suite = load_benchmark("discovery_suite")
 
 
 @pytest.mark.parametrize(

@@ -4,12 +4,11 @@ and the bias's walk as bc.filter_noise makes them (the bias instability bounded 
 horizon that follows from the filter's aiding) has the covariance of its errors, one told the
 bare Allan-line values is overconfident."""
 
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _benchmarks import load_benchmark
 
 from bayescal.classical._noise import classical_noise
 from bayescal.models._noise_model import NoiseModel
@@ -27,15 +26,9 @@ from bayescal.navigation._consistency import (
 RATE = 50.0
 
 
-def _benchmark():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "filter_consistency.py"
-    spec = importlib.util.spec_from_file_location("filter_consistency", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-MEMS = _benchmark().GRADES["MEMS"]  # the benchmark's MEMS unit, its output filter too
+MEMS = load_benchmark("filter_consistency").GRADES[
+    "MEMS"
+]  # the benchmark's MEMS unit, its output filter too
 
 
 def _exported(truth: dict, sensor: str, scenario: Scenario) -> tuple[float, float]:

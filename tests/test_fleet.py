@@ -4,7 +4,6 @@ Dask cluster and again through a real scheduler and worker processes on the loop
 (the same numbers), checked against a joint fit of the same data, with a bad recording that is
 reported and left out."""
 
-import importlib.util
 import json
 import math
 import os
@@ -15,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _benchmarks import load_benchmark
 
 import bayescal as bc
 
@@ -23,15 +23,6 @@ POPULATION = {"N": 0.004}, {"N": 0.25}, 0.3, 0.05, 0.02
 RUNS = (2, 1, 2, 1)
 SCHEDULER_OPTIONS = ("--host", "127.0.0.1", "--port", "0", "--no-dashboard")
 WORKER_OPTIONS = ("--nworkers", "2", "--nthreads", "1", "--no-dashboard")
-
-
-def load_benchmark():
-    spec = importlib.util.spec_from_file_location(
-        "fleet_coverage", ROOT / "benchmarks" / "fleet_coverage.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 # ---------------------------------------------------------------------------------------------
@@ -222,7 +213,7 @@ def test_a_unit_in_the_populations_tail_gets_every_stored_draw():
     assert posterior.passed, posterior.importance_failures
 
 
-def test_the_bias_posterior_is_the_exact_one(monkeypatch):
+def test_the_bias_posterior_is_the_exact_one():
     """The seeded small version of benchmarks/fleet_bias_exact.py: on three simulated fleets
     whose recordings are Gaussian measurements of their runs' biases, the population's 90 %
     intervals of the mean bias and of its two sds (emcee, as fit_fleet samples them) end
@@ -231,8 +222,7 @@ def test_the_bias_posterior_is_the_exact_one(monkeypatch):
     from bayescal.inference._population import bias_spread, fleet_data, sample_population
     from bayescal.models._population import BIAS_SD_PRIOR_FACTOR
 
-    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
-    study = importlib.import_module("fleet_bias_exact")
+    study = load_benchmark("fleet_bias_exact")
     rng = np.random.default_rng(2)
     names = {"bias_mean": "mu_bias", "bias_unit_sd": "tau_unit", "bias_run_sd": "tau_run"}
     for index in range(3):
@@ -300,7 +290,7 @@ def fleet_files(tmp_path_factory):
     """Four units (2, 1, 2, 1 runs) of white noise and a two-level turn-on bias, as the
     coverage benchmark simulates them, plus one unreadable recording and one the model does
     not fit in the manifest."""
-    benchmark = load_benchmark()
+    benchmark = load_benchmark("fleet_coverage")
     folder = tmp_path_factory.mktemp("fleet")
     population = bc.FleetPopulation(*POPULATION)
     manifest, units = benchmark.write_fleet(folder, population, RUNS, seed=7)

@@ -3,20 +3,13 @@ at high frequency (a Butterworth low-pass at or above the output rate, white ang
 rounding), the default ``noise`` keeps N the low-frequency level, and discovery names what
 shaped it."""
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
+from _benchmarks import load_benchmark
 
 import bayescal as bc
 
-_SPEC = importlib.util.spec_from_file_location(
-    "noise_high_frequency",
-    Path(__file__).resolve().parents[1] / "benchmarks" / "noise_high_frequency.py",
-)
-bench = importlib.util.module_from_spec(_SPEC)
-_SPEC.loader.exec_module(bench)
+bench = load_benchmark("noise_high_frequency")
 
 SAMPLES = 2**15
 SHAPE = {

@@ -4,10 +4,10 @@ the command line end to end, the calibration file of several channels, and bad i
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _benchmarks import load_benchmark
 
 import bayescal as bc
 from bayescal._output import write_csv
@@ -297,7 +297,7 @@ def test_the_library_refuses_what_the_command_line_refuses(old):
 
 
 def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_level(
-    old, monkeypatch
+    old,
 ):
     """A seeded small version of benchmarks/infield_taxi.py: a 10-minute park then a taxi of two
     legs at 10 m/s (30 deg, then 120 deg). Given the track headings, the filter finds both legs,
@@ -309,8 +309,8 @@ def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_lev
     updates the horizontal gyros, the heading it took off is the taxi's, and the realised 1 h
     position error with the updated calibration lies within the posterior's predicted
     99.9 % region (chi^2, 2 dof: 13.8), parked and at 250 m/s."""
-    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "benchmarks"))
-    from infield_taxi import park_truth, payoff
+    taxi = load_benchmark("infield_taxi")
+    park_truth, payoff = taxi.park_truth, taxi.payoff
 
     rate = 10.0
     taxi = bc.Taxi(legs=((30.0, 200.0), (120.0, 150.0)))
@@ -360,7 +360,7 @@ def test_a_wander_that_is_not_positive_is_refused(old):
             bc.infield_update(park.recording, old, latitude=45.0, align=(0, 300), wander=wander)
 
 
-def test_a_tactical_taxi_finds_its_legs_through_a_heading_error_of_degrees(old, monkeypatch):
+def test_a_tactical_taxi_finds_its_legs_through_a_heading_error_of_degrees(old):
     """The benchmark's tactical case (benchmarks/infield_taxi.py --tactical, seed 500, 10 Hz):
     gyros of ARW 0.05 deg/sqrt(h) aged by 4 sd of a calibration 10 times looser, so
     gyrocompassing leaves the heading more than 1 deg off (1.5 deg), beyond the legs' tolerance
@@ -368,8 +368,8 @@ def test_a_tactical_taxi_finds_its_legs_through_a_heading_error_of_degrees(old, 
     park's heading sd and the taxi's smoother relinearizes: both legs are found (before, none
     was, and the heading's interval missed the truth by 2.9 sd) and the heading error holds the
     truth within 3.3 posterior sd (a 0.1 % miss for a correct posterior)."""
-    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "benchmarks"))
-    from infield_taxi import LEGS, TACTICAL_GYRO, tactical
+    taxi = load_benchmark("infield_taxi")
+    LEGS, TACTICAL_GYRO, tactical = taxi.LEGS, taxi.TACTICAL_GYRO, taxi.tactical
 
     rate, calibrations = 10.0, tactical(old)
     taxi = bc.Taxi(legs=LEGS, speed=10.0)

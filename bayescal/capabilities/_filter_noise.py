@@ -302,6 +302,12 @@ def _vibration_item(fit: NoiseFit, vibration, si: float, sensor: str, rate_hz: f
         band &= gain >= MIN_GAIN
         density = density / np.where(gain > 0, gain, 1.0)
         through = f", divided by the fitted {shape}'s gain (where it is >= {MIN_GAIN:g})"
+    elif shape is not None:
+        through = (
+            f", not divided by the fitted {shape}'s gain (the record's rate, "
+            f"{data.rate_hz:g} Hz, is not the fit's): an upper part of the band the filter "
+            "lowers reads low"
+        )
     level = float(np.mean(density[band]))
     static = (fit.parameters["N"].mean * si) ** 2
     extra = math.sqrt(max(level - static, 0.0))

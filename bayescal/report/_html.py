@@ -24,7 +24,7 @@ from ..inference._sampler import Sampler
 from ..models._terms import PARAMETERS, card_values, display_values, parameter_unit
 from ._discovery import Findings, discovery_document, discovery_figures
 from ._figures import allan_figure, embedded, pair_figure, spectrum_figure
-from ._filter_config import filter_section, report_filter_document, report_filter_noise
+from ._filter_config import ReportFilterNoise, filter_section, report_filter_document
 from ._format import (
     STYLE,
     esc,
@@ -851,12 +851,14 @@ def build_report(
     discoveries: dict | None = None,
     files: dict | None = None,
     settings: dict | None = None,
+    navigation_filter: ReportFilterNoise | None = None,
 ) -> str:
     """The self-contained HTML page of one sensor's channels.
 
     ``discoveries`` maps a channel to its discovery (:class:`~bayescal.report._discovery.
     Findings`); ``files`` names the JSON and netCDF files written beside the page;
-    ``settings`` are shown as given (name -> text).
+    ``settings`` are shown as given (name -> text); ``navigation_filter`` what the channels
+    tell a navigation filter (:func:`~bayescal.report._filter_config.report_filter_noise`).
     """
     discoveries = discoveries or {}
     failed = [a for a in analyses if not a.passed]
@@ -904,7 +906,8 @@ def build_report(
             + "; ".join(f"{esc(k)}: <code>{esc(v)}</code>" for k, v in files.items())
             + "</p>"
         )
-    parts.append(filter_section(report_filter_noise(analyses), source))
+    if navigation_filter is not None:
+        parts.append(filter_section(navigation_filter, source))
     parts.append(_FIGURES_NOTE)
     for analysis in analyses:
         parts.append(_channel_section(analysis, discoveries.get(analysis.channel)))
@@ -951,9 +954,11 @@ def report_document(
     source: str,
     discoveries: dict | None = None,
     files: dict | None = None,
+    navigation_filter: ReportFilterNoise | None = None,
 ) -> dict:
     """The JSON behind the page: each channel's noise document, the posterior bands the
-    figures draw, the datasheet comparison and the discovery documents."""
+    figures draw, the datasheet comparison, the discovery documents and what the channels
+    tell a navigation filter."""
     channels = {}
     for a in analyses:
         figures = {}
@@ -977,7 +982,11 @@ def report_document(
         "files": files or {},
         "passed": all(a.passed for a in analyses),
         "channels": channels,
-        "navigation_filter": report_filter_document(report_filter_noise(analyses)),
+        **(
+            {"navigation_filter": report_filter_document(navigation_filter)}
+            if navigation_filter is not None
+            else {}
+        ),
         "discoveries": {
             channel: discovery_document(findings)
             for channel, findings in (discoveries or {}).items()

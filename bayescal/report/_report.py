@@ -19,6 +19,7 @@ from ..inference._sampler import Sampler
 from ..models._terms import parameter_unit, parse_terms
 from ..recording._recording import Channel, prepare_channel
 from ..recording._sensor_cards import find_card
+from ._filter_config import report_filter_noise
 from ._html import ChannelAnalysis, build_report, report_document, with_bands, with_effects
 from ._noise import NoiseAnalysis, Window
 
@@ -236,6 +237,7 @@ def write_report(
         "JSON": json_path.name,
         **{f"posterior {channel} (ArviZ netCDF)": p.name for channel, p in posteriors.items()},
     }
+    navigation_filter = report_filter_noise(analyses)
     page = build_report(
         analyses,
         title=title,
@@ -243,10 +245,18 @@ def write_report(
         discoveries=discoveries,
         files=files,
         settings=settings,
+        navigation_filter=navigation_filter,
     )
     write_json(
         json_path,
-        report_document(analyses, title=title, source=source, discoveries=discoveries, files=files),
+        report_document(
+            analyses,
+            title=title,
+            source=source,
+            discoveries=discoveries,
+            files=files,
+            navigation_filter=navigation_filter,
+        ),
     )
     write_atomic(html_path, page)
     failed = [a for a in analyses if not a.passed]

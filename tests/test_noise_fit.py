@@ -151,6 +151,25 @@ def test_a_term_the_evidence_rejects_is_never_taken_on_to_mend_a_check():
     assert added == {"rate_random_walk": "an excess at 0.05-0.1 Hz"}
 
 
+def test_of_terms_the_evidence_cannot_tell_apart_the_simpler_is_added():
+    """The forward search's rule, on its own, with the gains of the first step on a 10^8-sample
+    record of white noise and a rate random walk (``benchmarks/long_recording.py``): the
+    Gauss-Markov term beat the random walk by 0.1 nat, was added, and its model misfit the
+    Allan deviation at the longest tau (3.2x under the record's). Within the decisive bar of
+    the best, the term of fewer parameters is added; a richer term that wins by more than the
+    bar still is; no term below the bar is."""
+    from bayescal.inference._selection import _simplest_decisive
+
+    threshold = np.log(100.0)
+    first_step = {"gauss_markov": 8285.6, "rate_random_walk": 8285.5, "bias_instability": 7653.1}
+    assert _simplest_decisive(first_step, threshold) == "rate_random_walk"
+    short_tau = {"gauss_markov": 412.0, "rate_random_walk": 380.0}
+    assert _simplest_decisive(short_tau, threshold) == "gauss_markov"
+    same_size = {"bias_instability": 30.0, "rate_random_walk": 31.0, "gauss_markov": 32.0}
+    assert _simplest_decisive(same_size, threshold) == "rate_random_walk"
+    assert _simplest_decisive({"rate_random_walk": 4.0, "quantization": -2.0}, threshold) is None
+
+
 def test_an_allan_check_with_nothing_to_test_says_so():
     """A model whose Allan variance is nowhere positive (nothing measured to set beside it):
     the check is untested and passes, and names no misfit, instead of failing on an empty

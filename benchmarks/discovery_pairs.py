@@ -2,7 +2,7 @@
 rate of each pair, with exact binomial bounds.
 
     python benchmarks/discovery_pairs.py [--records 50] [--minutes 10] [--seed 0]
-                                         [--pairs NAME ...] [--per-process 4]
+                                         [--pairs NAME ...] [--per-process 4] [--workers 1]
 
 Each record is a static gyro, white noise of 0.05 deg/s per sample at 50 Hz (``--minutes``
 long), holding both effects of its pair at random sizes the record can be expected to show
@@ -25,8 +25,9 @@ long), holding both effects of its pair at random sizes the record can be expect
 A record is a hit when discovery names exactly the pair (a random walk it adds beside it
 counts against it, as every extra name does). Discovery runs without its final posterior
 (the names are decided before it). Records run in worker processes of ``--per-process``
-records each, one at a time (``nice`` it on a shared machine), so that memory stays that of
-one discovery; the run prints each record and then, per pair, hits / records with 90 %
+records each, one at a time by default (``nice`` it on a shared machine), so that memory stays
+that of one discovery (``--workers``: that many at once, on a machine with the cores and memory
+for them); the run prints each record and then, per pair, hits / records with 90 %
 Clopper-Pearson bounds and what the misses were named.
 """
 
@@ -144,6 +145,7 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--pairs", nargs="*", default=list(PAIRS), choices=list(PAIRS))
     parser.add_argument("--per-process", type=int, default=4, help="records per worker")
+    parser.add_argument("--workers", type=int, default=1, help="worker processes at once")
     args = parser.parse_args()
     jobs = [
         (pair, args.seed * 100_000 + 1000 * index + k, args.minutes)
@@ -153,9 +155,9 @@ def main() -> int:
     ]
     started = time.perf_counter()
     results = []
-    # One worker at a time, replaced every few records: memory stays one discovery's.
+    # Workers replaced every few records: memory stays one discovery's per worker.
     context = multiprocessing.get_context("spawn")
-    with context.Pool(1, maxtasksperchild=args.per_process) as pool:
+    with context.Pool(args.workers, maxtasksperchild=args.per_process) as pool:
         for result in pool.imap(run, jobs):
             results.append(result)
             print(

@@ -62,16 +62,18 @@ def test_walkers_that_do_not_divide_into_the_groups_are_refused():
         sampler.run_mcmc(np.random.default_rng(0).standard_normal((12, 1)), 1)
 
 
-def _problem(length: int, terms: str = "white,rrw", seed: int = 0):
-    y = bc.NoiseModel(rate_hz=100.0, bias=0.3, N=0.004, K=2e-3).simulate(length, seed=seed)
-    return prepare_noise(y, 100.0, terms=terms, unit="deg/s").problem
+def _problem(length: int, terms: str = "white,rrw", seed: int = 0, rate_hz: float = 100.0):
+    y = bc.NoiseModel(rate_hz=rate_hz, bias=0.3, N=0.004, K=2e-3).simulate(length, seed=seed)
+    return prepare_noise(y, rate_hz, terms=terms, unit="deg/s").problem
 
 
 def test_a_structure_that_differs_is_named():
     same = _problem(SAMPLES)
     with pytest.raises(InputError, match=r"b\.npz: its terms \('white', 'bias_instability'"):
-        stack_problems([same, _problem(SAMPLES, "white,bi")], ["a.npz", "b.npz"])
+        stack_problems([same, _problem(SAMPLES, "white,b")], ["a.npz", "b.npz"])
     with pytest.raises(InputError, match=r"c\.npz: its rate, length .* from a\.npz's"):
+        stack_problems([same, same, _problem(SAMPLES, rate_hz=200.0)], ["a.npz", "b.npz", "c.npz"])
+    with pytest.raises(InputError, match=r"c\.npz: its summaries' shapes differ from a\.npz's"):
         stack_problems([same, same, _problem(3 * SAMPLES)], ["a.npz", "b.npz", "c.npz"])
 
 

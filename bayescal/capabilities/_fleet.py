@@ -1,6 +1,7 @@
-"""A fleet of sensors: the noise of each recording, fitted on a Dask cluster, and the
-population of the units on top (:mod:`bayescal.inference._population`). Where the work runs
-is :mod:`._fleet_tasks`; the specifications a unit is assessed against, :mod:`._fleet_spec`.
+"""A fleet of sensors: the noise of each recording, fitted on a Dask cluster or batched on one
+JAX device, and the population of the units on top (:mod:`bayescal.inference._population`).
+Where the work runs is :mod:`._fleet_tasks`; the specifications a unit is assessed against,
+:mod:`._fleet_spec`.
 
 Seeds. The fleet's seed gives each recording its own, from the seed and the recording's data
 row (``numpy.random.SeedSequence([seed, 1, row])``), and the population its own

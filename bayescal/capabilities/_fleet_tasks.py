@@ -7,7 +7,8 @@ worker process per core (or ``workers``) runs them; with an address (``tcp://hos
 existing cluster does, through the same code; an existing ``distributed.Client`` may be passed
 too. The workers read the recordings themselves, so a remote cluster needs the manifest's
 files at the same paths (a shared file system) and the same bayescal (checked before any task
-is sent)."""
+is sent). Batched (:func:`run_batched`), the recordings are read in this process instead and
+those of one length and rate fitted together on JAX's default device."""
 
 import contextlib
 import os

@@ -21,8 +21,6 @@ whose batched posterior fails its checks is for the caller to fit alone. The dra
 those of the records sampled alone (the random streams differ); their distribution is.
 """
 
-import sys
-
 import jax
 import numpy as np
 from emcee.autocorr import integrated_time
@@ -161,7 +159,6 @@ def sample_noise_each(
     seeds,
     n_walkers: int = 32,
     max_steps: int = 40_000,
-    progress: bool = False,
 ) -> list[NoisePosterior]:
     """The posterior of each of ``problems`` (records of one structure, :func:`stack_problems`)
     in one batched run (module docstring), as :func:`~._noise_posterior.sample_noise` gives it.
@@ -195,20 +192,11 @@ def sample_noise_each(
         GroupedDEMove(len(problems)),
     )
     groups = [slice(g * walkers, (g + 1) * walkers) for g in range(len(problems))]
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(
-            total=max_steps, desc="posteriors (emcee, batched)", unit="step", file=sys.stderr
-        )
     converged = np.zeros(len(problems), dtype=bool)
     longer_before, chunk = converged.copy(), FIRST_CHUNK
     while sampler.iteration < max_steps:
         steps = min(chunk, max_steps - sampler.iteration)
         state = sampler.run_mcmc(state, steps)
-        if bar is not None:
-            bar.update(steps)
         chain = sampler.get_chain()
         longer = np.array(
             [long_enough(integrated_time(chain[:, g], tol=0), sampler.iteration) for g in groups]
@@ -218,8 +206,6 @@ def sample_noise_each(
         if converged.all():
             break
         chunk = max(chunk, sampler.iteration // 4)
-    if bar is not None:
-        bar.close()
     posteriors = []
     for g, problem in enumerate(problems):
         diagnostics, kept = diagnose(

@@ -1,6 +1,7 @@
-"""A fleet of sensors: the noise of each recording, fitted on a Dask cluster, and the
-population of the units on top (:mod:`bayescal.inference._population`). Where the work runs
-is :mod:`._fleet_tasks`; the specifications a unit is assessed against, :mod:`._fleet_spec`.
+"""A fleet of sensors: the noise of each recording, fitted on a Dask cluster or batched on one
+JAX device, and the population of the units on top (:mod:`bayescal.inference._population`).
+Where the work runs is :mod:`._fleet_tasks`; the specifications a unit is assessed against,
+:mod:`._fleet_spec`.
 
 Seeds. The fleet's seed gives each recording its own, from the seed and the recording's data
 row (``numpy.random.SeedSequence([seed, 1, row])``), and the population its own
@@ -41,7 +42,7 @@ from ..models._terms import CLASSICAL_TERMS, display_values, fleet_terms, parame
 from ..recording._manifest import Manifest, read_manifest
 from ..recording._sensor_cards import SensorCard, find_card
 from ._fleet_spec import assessed_limits, checked_spec
-from ._fleet_tasks import RecordingFailure, RecordingTask, run_on_cluster
+from ._fleet_tasks import RecordingFailure, RecordingTask, run_batched, run_on_cluster
 
 
 def _interval(draws, unit: str, transform=None) -> dict:
@@ -340,6 +341,7 @@ def fit_fleet(
     channels_axis: int | None = None,
     scheduler=None,
     workers: int | None = None,
+    batch: bool | None = None,
     sampler: Sampler = Sampler(),
 ) -> FleetFit:
     """The population of a fleet of sensors, from each recording's noise posterior.
@@ -381,6 +383,15 @@ def fit_fleet(
         ``LocalCluster`` of ``workers`` processes (default: one per core).
     workers : int, optional
         Worker processes of the local cluster.
+    batch : bool, optional
+        Fit the recordings in this process on JAX's default device, those of one length
+        (on their grid) and rate together: one vmapped MAP and one emcee run of all their
+        walkers, each recording's paired only among themselves
+        (:mod:`bayescal.inference._batched`), where a GPU does hundreds at once. A
+        recording alone in its batch, or whose batched posterior failed its sampler checks,
+        is fitted alone. False: one Dask task per recording. Default (None): batched when
+        JAX's default device is a GPU and neither ``scheduler`` nor ``workers`` is given.
+        The two paths' draws differ (random streams), their distributions do not.
     sampler : Sampler
         How every posterior is sampled, each recording's and the population's
         (:class:`~bayescal.Sampler`); its ``progress`` shows a bar over the recordings and
@@ -394,8 +405,8 @@ def fit_fleet(
     Raises
     ------
     InputError
-        A bad manifest or option (before any work), a fleet of one recording, or a spec whose
-        unit does not fit the channel.
+        A bad manifest or option (before any work), a fleet of one recording, a spec whose
+        unit does not fit the channel, or batched fits asked for with a scheduler or workers.
     HealthCheckError
         Fewer than two recordings passed.
 
@@ -449,7 +460,20 @@ def fit_fleet(
         )
         for row in manifest.rows
     ]
-    results, sizes, where = run_on_cluster(tasks, scheduler, workers, sampler.progress)
+    if batch is None:
+        import jax
+
+        batch = jax.default_backend() == "gpu" and scheduler is None and workers is None
+    if batch and (scheduler is not None or workers is not None):
+        raise InputError(
+            "batched fits run in this process on JAX's default device: scheduler= and "
+            "workers= are for one task per recording",
+            fix="leave scheduler= and workers= out, or fit one task per recording",
+        )
+    if batch:
+        results, sizes, where = run_batched(tasks, sampler.progress)
+    else:
+        results, sizes, where = run_on_cluster(tasks, scheduler, workers, sampler.progress)
     fitted = [r for r in results if isinstance(r, RecordingDraws)]
     failed = tuple(r for r in results if isinstance(r, RecordingFailure))
     if len(fitted) < 2:

@@ -7,7 +7,8 @@ worker process per core (or ``workers``) runs them; with an address (``tcp://hos
 existing cluster does, through the same code; an existing ``distributed.Client`` may be passed
 too. The workers read the recordings themselves, so a remote cluster needs the manifest's
 files at the same paths (a shared file system) and the same bayescal (checked before any task
-is sent)."""
+is sent). Batched (:func:`run_batched`), the recordings are read in this process instead and
+those of one length and rate fitted together on JAX's default device."""
 
 import contextlib
 import os
@@ -110,28 +111,42 @@ def recording_draws(fit, task: RecordingTask, seconds: float) -> RecordingDraws:
 def fit_recording(task: RecordingTask) -> RecordingDraws | RecordingFailure:
     """One Dask task: load a recording, fit its channel's noise, keep what the population
     needs; a recording that cannot be used comes back as a :class:`RecordingFailure`."""
-    from ..recording._recording import load_recording
-    from ..recording._stream import is_long_recording, stream_channel
     from ._noise import fit_noise
 
     started = time.perf_counter()
     try:
-        if is_long_recording(task.path):  # a worker's memory bounded by a block, as noise's
-            _refuse_unstreamed(task)
-            skip_rows = task.reading.get("skip_rows", 0)
-            channel = stream_channel(task.path, task.channel, skip_rows=skip_rows, **task.grid)
-        else:
-            channel = load_recording(task.path, **task.reading).channel(task.channel, **task.grid)
         fit = fit_noise(
-            channel,
+            _channel(task),
             terms=task.terms,
             sensor=task.sensor,
             seed=task.seed,
             sampler=task.sampler,
         )
     except BayescalError as error:
-        kind = "input" if isinstance(error, InputError) else "health"
-        return RecordingFailure(task.row, task.path, task.unit, task.run, kind, str(error))
+        return _failure(task, error)
+    return _judged(fit, task, time.perf_counter() - started)
+
+
+def _channel(task: RecordingTask):
+    """The task's channel on its grid, read whole or streamed (a long recording: a worker's
+    memory bounded by a block, as noise's)."""
+    from ..recording._recording import load_recording
+    from ..recording._stream import is_long_recording, stream_channel
+
+    if is_long_recording(task.path):
+        _refuse_unstreamed(task)
+        skip_rows = task.reading.get("skip_rows", 0)
+        return stream_channel(task.path, task.channel, skip_rows=skip_rows, **task.grid)
+    return load_recording(task.path, **task.reading).channel(task.channel, **task.grid)
+
+
+def _failure(task: RecordingTask, error: BayescalError) -> RecordingFailure:
+    kind = "input" if isinstance(error, InputError) else "health"
+    return RecordingFailure(task.row, task.path, task.unit, task.run, kind, str(error))
+
+
+def _judged(fit, task: RecordingTask, seconds: float) -> RecordingDraws | RecordingFailure:
+    """What the population takes of a recording's fit: its draws, or why it is left out."""
     if not fit.diagnostics.passed:
         return RecordingFailure(
             task.row,
@@ -151,7 +166,83 @@ def fit_recording(task: RecordingTask) -> RecordingDraws | RecordingFailure:
             f"the model ({', '.join(fit.terms)}) does not fit the record: "
             + "; ".join(fit.misfits),
         )
-    return recording_draws(fit, task, time.perf_counter() - started)
+    return recording_draws(fit, task, seconds)
+
+
+def run_batched(tasks, progress: bool):
+    """Every task in this process, the recordings of one length, rate and problem structure
+    fitted together on JAX's default device (:func:`~bayescal.inference._batched.
+    sample_noise_each`: one vmapped MAP and one emcee run per batch), in row order, with the
+    size of each result and where the work ran. A recording alone in its batch, or whose
+    batched posterior failed its sampler checks (a stuck run, which the batch does not
+    restart), is fitted alone as a Dask task would fit it (:func:`fit_recording`)."""
+    import jax
+
+    from ..inference._batched import sample_noise_each
+    from ._noise import finish_noise, prepare_noise
+
+    started = time.perf_counter()
+    results, batches = {}, {}
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(tasks), desc="fleet (recordings)", unit="rec", file=sys.stderr)
+    for task in tasks:
+        begun = time.perf_counter()
+        try:
+            front = prepare_noise(_channel(task), terms=task.terms, sensor=task.sensor)
+        except BayescalError as error:
+            results[task.row] = _failure(task, error)
+            if bar is not None:
+                bar.update(1)
+            continue
+        shaped = front.problem.for_likelihood()
+        key = (
+            front.data.rate_hz,
+            front.data.values.size,
+            jax.tree.structure(shaped),
+            tuple(np.shape(leaf) for leaf in jax.tree.leaves(shaped)),
+        )
+        batches.setdefault(key, []).append((task, front, time.perf_counter() - begun))
+    for batch in batches.values():
+        alone = [task for task, _, _ in batch] if len(batch) == 1 else []
+        if not alone:
+            begun = time.perf_counter()
+            sampler = batch[0][0].sampler
+            posteriors = sample_noise_each(
+                [front.problem for _, front, _ in batch],
+                names=[task.path for task, _, _ in batch],
+                terms=batch[0][0].terms,
+                seeds=[task.seed for task, _, _ in batch],
+                n_walkers=sampler.n_walkers,
+                max_steps=sampler.max_steps,
+            )
+            share = (time.perf_counter() - begun) / len(batch)
+            for (task, front, own), posterior in zip(batch, posteriors, strict=True):
+                if not posterior.diagnostics.passed:
+                    alone.append(task)
+                    continue
+                fit = finish_noise(front, posterior, task.seed)
+                results[task.row] = _judged(fit, task, own + share)
+                if bar is not None:
+                    bar.update(1)
+        for task in alone:
+            results[task.row] = fit_recording(task)
+            if bar is not None:
+                bar.update(1)
+    if bar is not None:
+        bar.close()
+    ordered = [results[task.row] for task in tasks]
+    sizes = {r.row: len(pickle.dumps(r)) for r in ordered}
+    sizes_of_batches = ", ".join(str(len(batch)) for batch in batches.values())
+    where = {
+        "scheduler": f"JAX device {jax.devices()[0]}",
+        "cluster": f"batched fits in this process (batches of {sizes_of_batches} recordings)",
+        "workers": 1,
+        "wall_s": time.perf_counter() - started,
+    }
+    return ordered, sizes, where
 
 
 def _refuse_unstreamed(task: RecordingTask) -> None:

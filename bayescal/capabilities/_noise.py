@@ -3,7 +3,7 @@ and, beside them, the posterior of the noise model (:mod:`bayescal.inference._no
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property, partial
 
 import numpy as np
@@ -246,26 +246,12 @@ def noise_posterior(
     sit on (its rounding a known floor), and its checks. ``level_values`` are the samples
     whose level the bias is (``values`` by default): what a calibration's static sections
     give; ``allan``: the Allan deviation of ``values`` at octave taus when already computed."""
-    lsb = discrete_step(values)
-    family = ("white", *CANDIDATE_TERMS) if terms == AUTO else terms
-    # Terms found in the record (spectral lines) are taken out before the noise is fitted:
-    # the noise model, its checks and N are of what they leave.
-    with stage("spectral lines (periodogram scan)"):
-        found = find_in_record(family, values, rate_hz)
-    if any(finding.found for finding in found.values()):
-        values = without_found(found, values)
-        if level_values is not None and np.shape(level_values) == np.shape(values):
-            level_values = without_found(found, level_values)
-        allan = None
-    with stage("summaries (binned periodogram, block means)"):
-        spectral, level = noise_summaries(
-            values, rate_hz, family, level_values, exclude=excluded_bands(found)
-        )
-    checker = _with_what_is_left(noise_model_checker(spectral, values, unit, allan), found)
+    setup = noise_setup(values, rate_hz, terms, unit, level_values, allan)
+    spectral, level, lsb, found = setup.spectral, setup.level, setup.lsb, setup.found
     selection, refused, chosen = None, {}, terms
 
     def misfit(model) -> str:
-        return "; ".join(check.misfit for check in checker(model) if not check.passed)
+        return "; ".join(check.misfit for check in setup.checker(model) if not check.passed)
 
     # A first run on a machine traces the optimisers: said beside the progress bar.
     with announcing(sampler.progress):
@@ -285,7 +271,7 @@ def noise_posterior(
                         candidates=candidates,
                     )
                 chosen = selection.terms
-            problem = NoiseProblem(spectral, level, prior_of(chosen), lsb=np.asarray(lsb))
+            problem = setup.problem(chosen, prior_of)
             with stage("posterior (MAP, emcee, draws)"):
                 fit = sample_noise(
                     problem,
@@ -301,14 +287,65 @@ def noise_posterior(
             refused[culprit.term] = culprit
     if refused:
         selection = selection.with_refused(refused)
-    terms = chosen
+    return noise_posterior_fit(setup, fit, selection, unit, seed)
+
+
+@dataclass(frozen=True)
+class NoiseSetup:
+    """What a record's noise posterior is fitted to and checked against, before any term is
+    chosen (:func:`noise_setup`)."""
+
+    lsb: float
+    """The resolution the samples are rounded to (zero: none), channel unit."""
+    found: dict
+    """The terms found in the record (spectral lines), taken out of it."""
+    spectral: object
+    """The spectral summary (:class:`~bayescal.models._whittle.SpectralSummary`)."""
+    level: object
+    """The level summary (:class:`~bayescal.models._level.LevelSummary`)."""
+    checker: Callable
+    """A model -> its checks against the record."""
+
+    def problem(self, terms: tuple[str, ...], prior_of: Callable) -> NoiseProblem:
+        """The noise problem of ``terms`` (named, not ``auto``) with the prior of them."""
+        return NoiseProblem(self.spectral, self.level, prior_of(terms), lsb=np.asarray(self.lsb))
+
+
+def noise_setup(values, rate_hz: float, terms, unit: str, level_values=None, allan=None):
+    """The :class:`NoiseSetup` of ``values`` (:func:`noise_posterior`'s arguments): the grid
+    the samples sit on, the terms found in the record taken out, the summaries of the terms'
+    family and the checks."""
+    lsb = discrete_step(values)
+    family = ("white", *CANDIDATE_TERMS) if terms == AUTO else terms
+    # Terms found in the record (spectral lines) are taken out before the noise is fitted:
+    # the noise model, its checks and N are of what they leave.
+    with stage("spectral lines (periodogram scan)"):
+        found = find_in_record(family, values, rate_hz)
+    if any(finding.found for finding in found.values()):
+        values = without_found(found, values)
+        if level_values is not None and np.shape(level_values) == np.shape(values):
+            level_values = without_found(found, level_values)
+        allan = None
+    with stage("summaries (binned periodogram, block means)"):
+        spectral, level = noise_summaries(
+            values, rate_hz, family, level_values, exclude=excluded_bands(found)
+        )
+    checker = _with_what_is_left(noise_model_checker(spectral, values, unit, allan), found)
+    return NoiseSetup(lsb, found, spectral, level, checker)
+
+
+def noise_posterior_fit(
+    setup: NoiseSetup, fit: NoisePosterior, selection, unit: str, seed: int
+) -> NoisePosteriorFit:
+    """A record's :class:`NoisePosteriorFit` from its posterior ``fit``: the spectral lines'
+    posterior where the model holds them, and the checks of the MAP against the record."""
     lines = None
-    if SpectralLines.name in found and SpectralLines.name in terms:
+    if SpectralLines.name in setup.found and SpectralLines.name in fit.terms:
         with stage("spectral lines' posterior"):
-            lines = lines_posterior(found[SpectralLines.name], fit, unit, seed=seed)
+            lines = lines_posterior(setup.found[SpectralLines.name], fit, unit, seed=seed)
     with stage("fit checks (Allan deviation, spectrum, lag-1)"):
-        checks = tuple(checker(fit.model_at_map()))
-    return NoisePosteriorFit(fit, selection, lsb, checks, lines)
+        checks = tuple(setup.checker(fit.model_at_map()))
+    return NoisePosteriorFit(fit, selection, setup.lsb, checks, lines)
 
 
 def fit_noise(
@@ -389,6 +426,48 @@ def fit_noise(
     >>> fit.summary["N"]["unit"]
     'deg/s/sqrt(Hz)'
     """
+    front = _noise_input(
+        y, rate_hz, terms, sensor, unit, channel, confidence, taus, sensor_fallback
+    )
+    posterior = noise_posterior(
+        front.data.values,
+        front.data.rate_hz,
+        terms=front.terms,
+        prior_of=front.prior_of,
+        unit=front.data.unit,
+        allan=front.allan,
+        seed=seed,
+        sampler=sampler_of(sampler),
+    )
+    return _noise_fit(front, posterior)
+
+
+@dataclass(frozen=True)
+class NoiseInput:
+    """A record's noise fit before its posterior (:func:`prepare_noise`): the channel, its
+    classical block, the priors of its terms and, for named terms, the problem to sample."""
+
+    data: object
+    """The channel's samples, rate, unit, name and source
+    (:func:`~bayescal.recording._inputs.channel_input`)."""
+    terms: object
+    """The terms (named, or ``auto``)."""
+    classical: ClassicalNoise
+    prior_of: Callable
+    notes: tuple[str, ...]
+    allan: object
+    """The classical Allan deviation at octave taus, which the checks read (None: other
+    taus, computed again)."""
+    setup: NoiseSetup | None = None
+    """The summaries and checks (:func:`noise_setup`), for named terms."""
+
+    @property
+    def problem(self) -> NoiseProblem:
+        """The noise problem of the named terms."""
+        return self.setup.problem(self.terms, self.prior_of)
+
+
+def _noise_input(y, rate_hz, terms, sensor, unit, channel, confidence, taus, sensor_fallback):
     data = channel_input(y, rate_hz, unit=unit, channel=channel)
     values, rate_hz, unit, channel = data.values, data.rate_hz, data.unit, data.channel
     terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
@@ -403,27 +482,43 @@ def fit_noise(
         raise InputError(error.problem, source=data.source, column=channel, fix=error.fix) from None
     family = ("white", *CANDIDATE_TERMS) if terms == AUTO else terms
     prior_of, prior_notes = noise_priors(family, classical, unit, sensor, sensor_fallback)
-    posterior = noise_posterior(
-        values,
-        rate_hz,
-        terms=terms,
-        prior_of=prior_of,
-        unit=unit,
-        # The classical Allan deviation at octave taus is the one the checks read: not again.
-        allan=classical.allan if isinstance(taus, str) and taus == "octave" else None,
-        seed=seed,
-        sampler=sampler_of(sampler),
+    # The classical Allan deviation at octave taus is the one the checks read: not again.
+    allan = classical.allan if isinstance(taus, str) and taus == "octave" else None
+    return NoiseInput(data, terms, classical, prior_of, (*data.notes, *prior_notes), allan)
+
+
+def prepare_noise(y, rate_hz: float | None = None, *, terms, sensor=None, unit=None):
+    """:func:`fit_noise` of named ``terms`` up to its posterior: the :class:`NoiseInput`
+    whose problem :func:`finish_noise` takes back with its posterior, sampled elsewhere (a
+    fleet's, batched over recordings)."""
+    front = _noise_input(y, rate_hz, terms, sensor, unit, None, 0.95, "octave", False)
+    if front.terms == AUTO:
+        raise ValueError("prepare_noise takes named terms")
+    setup = noise_setup(
+        front.data.values, front.data.rate_hz, front.terms, front.data.unit, None, front.allan
     )
+    return replace(front, setup=setup)
+
+
+def finish_noise(front: NoiseInput, posterior: NoisePosterior, seed: int) -> NoiseFit:
+    """The :class:`NoiseFit` of a :func:`prepare_noise` and the posterior of its problem,
+    checked against the record as :func:`fit_noise` checks it."""
+    fit = noise_posterior_fit(front.setup, posterior, None, front.data.unit, seed)
+    return _noise_fit(front, fit)
+
+
+def _noise_fit(front: NoiseInput, posterior: NoisePosteriorFit) -> NoiseFit:
+    data = front.data
     return NoiseFit(
-        channel=channel,
-        unit=unit,
-        rate_hz=rate_hz,
-        classical=classical,
+        channel=data.channel,
+        unit=data.unit,
+        rate_hz=data.rate_hz,
+        classical=front.classical,
         fit=posterior.posterior,
         checks=posterior.checks,
         selection=posterior.selection,
         lsb=posterior.lsb,
         source=data.source,
-        notes=(*data.notes, *prior_notes),
+        notes=front.notes,
         lines=posterior.lines,
     )

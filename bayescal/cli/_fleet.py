@@ -7,6 +7,7 @@ written), or a recording that could not be read or analysed as given (the rest i
 written, and the recording named).
 """
 
+import argparse
 import sys
 
 from .._errors import InputError
@@ -113,6 +114,15 @@ def add_parser(commands) -> None:
         metavar="K",
         help="worker processes of the local cluster (default: one per core)",
     )
+    cluster.add_argument(
+        "--batch",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="fit the recordings of one length and rate together in this process on JAX's "
+        "default device (a GPU fits hundreds at once); --no-batch: one Dask task per "
+        "recording; default: batched when JAX's default device is a GPU and neither "
+        "--scheduler nor --workers is given",
+    )
     output = parser.add_argument_group("output")
     output.add_argument("--json", metavar="PATH", help="write the result as JSON")
     output.add_argument(
@@ -163,6 +173,7 @@ def run(args) -> int:
         **reading_options(args),
         scheduler=args.scheduler,
         workers=args.workers,
+        batch=args.batch,
         sampler=sampler(args),
     )
     result = fleet_result(fleet)

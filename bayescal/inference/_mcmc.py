@@ -75,22 +75,37 @@ def _walker_log_densities(log_density, model, theta):
     return jax.vmap(lambda walker: log_density(model, walker))(theta)
 
 
-def batch_log_density(log_density, model):
+@persistent_jit
+def _grouped_log_densities(log_density, models, theta):
+    """Walkers (groups x walkers each, dimension), group g's of model g of the stack
+    ``models`` (arrays with a leading axis of groups): vmap over the groups of vmap over
+    their walkers."""
+    groups = jax.tree.leaves(models)[0].shape[0]
+    by_group = theta.reshape(groups, -1, theta.shape[-1])
+    return jax.vmap(
+        lambda model, walkers: jax.vmap(lambda walker: log_density(model, walker))(walkers)
+    )(models, by_group).reshape(-1)
+
+
+def batch_log_density(log_density, model, grouped: bool = False):
     """``theta (walkers, dimension) -> (walkers,)`` log densities ``log_density(model,
     theta)`` as numpy, for emcee: every walker in one compiled call per step.
 
     ``log_density`` must be a module-level function (it keys the compilation cache). The
     function is traced, or loaded from the trace cache (:mod:`._traced`), at the first call,
     and the model's arrays are moved to the device once: each of the sampler's thousands of
-    calls passes only the walkers' positions.
+    calls passes only the walkers' positions. ``grouped``: ``model`` is a stack of models
+    (a leading axis of groups) and the walkers come in as many equal groups, in order, each
+    of its own model (:class:`~bayescal.inference._batched.GroupedDEMove`).
     """
     require_x64()
+    over = _grouped_log_densities if grouped else _walker_log_densities
     specialised = {}
 
     def batch(theta):
         theta = np.asarray(theta, dtype=float)
         if theta.shape not in specialised:
-            function, leaves = _walker_log_densities.specialised(log_density, model, theta)
+            function, leaves = over.specialised(log_density, model, theta)
             fixed = [jax.numpy.asarray(leaf) for leaf in leaves[:-1]]
             specialised[theta.shape] = partial(function, *fixed)
         return np.asarray(specialised[theta.shape](theta))
@@ -125,9 +140,8 @@ def sample_ensemble(
     # anchor walker instead of a unit vector (fixed on emcee's main branch, PR #531, not yet
     # released). A fifth of snooker moves made every posterior's sd 2-3 % too small, and a
     # hierarchical population's intervals 7 % too narrow (tests/test_mcmc.py measures it).
-    sampler = _ensemble(log_posterior_batch, n_walkers, dimension, rng)
-    spread = np.linalg.cholesky(covariance + 1e-12 * np.eye(dimension))
-    state = start + rng.standard_normal((n_walkers, dimension)) @ spread.T
+    sampler = ensemble(log_posterior_batch, n_walkers, dimension, rng)
+    state = laplace_start(start, covariance, rng, n_walkers)
     bar = None
     if progress:
         from tqdm import tqdm
@@ -143,10 +157,7 @@ def sample_ensemble(
         state = sampler.run_mcmc(state, steps)
         if bar is not None:
             bar.update(steps)
-        tau = sampler.get_autocorr_time(tol=0)
-        longer = bool(
-            np.all(np.isfinite(tau)) and sampler.iteration > AUTOCORR_MULTIPLE * np.max(tau)
-        )
+        longer = long_enough(sampler.get_autocorr_time(tol=0), sampler.iteration)
         if longer and longer_before:
             converged = True
             break
@@ -158,7 +169,7 @@ def sample_ensemble(
             restarts += 1
             used += sampler.iteration
             state = _restart(sampler, rng)
-            sampler = _ensemble(log_posterior_batch, n_walkers, dimension, rng)
+            sampler = ensemble(log_posterior_batch, n_walkers, dimension, rng)
             longer_before, chunk = False, 250
     if bar is not None:
         bar.close()
@@ -166,10 +177,29 @@ def sample_ensemble(
     return sampler, converged
 
 
-def _ensemble(log_posterior_batch, n_walkers: int, dimension: int, rng):
-    """emcee's ensemble with differential-evolution moves, seeded from ``rng``."""
+def laplace_start(start, covariance, rng, n_walkers: int) -> np.ndarray:
+    """``n_walkers`` starting points drawn from the Laplace approximation N(start,
+    covariance)."""
+    spread = np.linalg.cholesky(covariance + 1e-12 * np.eye(start.size))
+    return start + rng.standard_normal((n_walkers, start.size)) @ spread.T
+
+
+def long_enough(tau, steps: int) -> bool:
+    """Whether a chain of ``steps`` is longer than AUTOCORR_MULTIPLE autocorrelation times
+    ``tau`` (every parameter's, all finite)."""
+    return bool(np.all(np.isfinite(tau)) and steps > AUTOCORR_MULTIPLE * np.max(tau))
+
+
+def ensemble(log_posterior_batch, n_walkers: int, dimension: int, rng, move=None):
+    """emcee's ensemble, its log densities vectorised, seeded from ``rng``: with
+    differential-evolution moves, or ``move`` (a grouped one,
+    :class:`~bayescal.inference._batched.GroupedDEMove`)."""
     sampler = emcee.EnsembleSampler(
-        n_walkers, dimension, log_posterior_batch, vectorize=True, moves=emcee.moves.DEMove()
+        n_walkers,
+        dimension,
+        log_posterior_batch,
+        vectorize=True,
+        moves=emcee.moves.DEMove() if move is None else move,
     )
     # emcee wraps the log density to print a traceback of any exception it raises before
     # passing it on: an interruption (Ctrl-C, the command line's SIGTERM) is to end the run

@@ -31,14 +31,18 @@ def _scales(problem: NoiseProblem) -> list[bool]:
     return [name in scales for name in problem.parameters]
 
 
-def noise_mode(problem: NoiseProblem) -> Mode:
-    """The MAP from two starts — the prior centres (the Allan bounds) and a point well below
-    them, where the terms a record does not hold sit. The optimiser takes the problem in the
-    shapes every record shares (:meth:`NoiseProblem.for_likelihood`)."""
+def noise_starts(problem: NoiseProblem) -> tuple[jax.Array, jax.Array]:
+    """The MAP's two starts: the prior centres (the Allan bounds) and a point well below
+    them, where the terms a record does not hold sit."""
     base = jnp.asarray(problem.prior.location)
-    lowered = base - 3.0 * jnp.array(_scales(problem))
+    return base, base - 3.0 * jnp.array(_scales(problem))
+
+
+def noise_mode(problem: NoiseProblem) -> Mode:
+    """The MAP from :func:`noise_starts`. The optimiser takes the problem in the shapes
+    every record shares (:meth:`NoiseProblem.for_likelihood`)."""
     return maximum_a_posteriori(
-        NoiseProblem.log_posterior, problem.for_likelihood(), (base, lowered)
+        NoiseProblem.log_posterior, problem.for_likelihood(), noise_starts(problem)
     )
 
 
@@ -149,6 +153,22 @@ def sample_noise(
         progress,
     )
     diagnostics, kept = diagnose(sampler, problem.parameters, converged, estimate.converged)
+    return noise_posterior_of(problem, estimate, diagnostics, kept, rng, terms=terms, seed=seed)
+
+
+def noise_posterior_of(
+    problem: NoiseProblem,
+    estimate: Mode,
+    diagnostics: Diagnostics,
+    kept: np.ndarray,
+    rng: np.random.Generator,
+    *,
+    terms: tuple[str, ...],
+    seed: int,
+) -> NoisePosterior:
+    """The :class:`NoisePosterior` of ``problem`` from its MAP, its sampler's checks and the
+    draws kept (walkers, draws, dimension; :func:`~._mcmc.diagnose`): each draw's values, its
+    bias from the Gaussian conditional (keyed by ``rng``), densities and summaries."""
     natural, bias_conditional = _draw_values(
         problem, jnp.asarray(kept), jax.random.PRNGKey(int(rng.integers(2**31)))
     )

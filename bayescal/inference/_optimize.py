@@ -36,8 +36,10 @@ class Mode(eqx.Module):
         return np.linalg.pinv(self.hessian)
 
 
-@persistent_jit
-def _minimise(log_density, model, starts):
+def _solve(log_density, model, starts):
+    """The best of BFGS's optima from ``starts``, the Hessian there and whether it converged
+    (traced: :func:`_minimise` compiles it for one model, :func:`_minimise_each` for a stack)."""
+
     def objective(theta, _):
         return -log_density(model, theta)
 
@@ -56,6 +58,17 @@ def _minimise(log_density, model, starts):
     return best, jax.hessian(lambda theta: objective(theta, None))(best), converged
 
 
+_minimise = persistent_jit(_solve)
+
+
+@persistent_jit
+def _minimise_each(log_density, models, starts):
+    """:func:`_solve` of each of a stack of models (arrays with a leading axis, one per
+    model) from its own starts: one compiled call (optimistix's solves map with ``vmap``,
+    each keeping its own steps and convergence)."""
+    return jax.vmap(lambda model, own: _solve(log_density, model, own))(models, starts)
+
+
 def maximum_a_posteriori(
     log_density: Callable, model, starts: tuple[jax.Array, ...] | jax.Array
 ) -> Mode:
@@ -69,3 +82,16 @@ def maximum_a_posteriori(
     starts = (starts,) if not isinstance(starts, (tuple, list)) else tuple(starts)
     best, hessian, converged = _minimise(log_density, model, tuple(jnp.asarray(s) for s in starts))
     return Mode(np.asarray(best), np.asarray(hessian), bool(converged))
+
+
+def maximum_a_posteriori_each(log_density: Callable, models, starts: tuple) -> list[Mode]:
+    """:func:`maximum_a_posteriori` of each of a stack of models (their arrays stacked on a
+    leading axis, :func:`~bayescal.inference._batched.stack_problems`) from its own starts
+    (a tuple of (models, dimension) arrays), in one compiled call; each keeps its own
+    convergence status."""
+    require_x64()
+    best, hessian, converged = _minimise_each(
+        log_density, models, tuple(jnp.asarray(s) for s in starts)
+    )
+    best, hessian, converged = np.asarray(best), np.asarray(hessian), np.asarray(converged)
+    return [Mode(best[i], hessian[i], bool(converged[i])) for i in range(best.shape[0])]

@@ -355,6 +355,64 @@ def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_lev
         assert found[flight]["mahalanobis2"] < 13.8, (flight, found[flight])
 
 
+def test_a_taxi_whose_wander_exceeds_its_model_fails_the_legs_check(run_cli, old, tmp_path):
+    """The taxi of the test above, told a wander ten times smaller than the simulated one
+    (0.05 m against 0.5 m): its cross-track residuals exceed their predicted spread on each leg
+    (chi^2, 99.9 %), so the heading it would tell is overconfident: the result fails,
+    ``.check()`` raises naming the leg, and the command line exits 1 saying so. Told the
+    simulated wander, every leg passes."""
+    rate = 10.0
+    park = bc.simulate_park(
+        old,
+        seed=5,
+        duration_s=600.0,
+        rate_hz=rate,
+        taxi=bc.Taxi(legs=((30.0, 200.0), (120.0, 150.0))),
+    )
+    end = park.recording.columns["time"][-1] + 1 / rate
+    options = {"latitude": 45.0, "align": (0, 600), "taxi": (600, end), "seed": 5}
+    options["track_heading"] = "30,120"
+    narrow = bc.infield_update(park.recording, old, wander=(0.05, 20.0), **options)
+    assert not narrow.passed
+    legs = narrow.checks["taxi_innovations"]
+    assert len(legs) == 2 and not any(leg["passed"] for leg in legs)
+    with pytest.raises(bc.HealthCheckError, match="cross-track innovations on the 30 deg leg"):
+        narrow.check()
+    right = bc.infield_update(park.recording, old, **options)
+    assert all(leg["passed"] for leg in right.checks["taxi_innovations"])
+    recording = park.recording
+    columns = {
+        f"{name}[{recording.header_units[name]}]": v for name, v in recording.columns.items()
+    }
+    write_csv(tmp_path / "taxi.csv", columns)
+    bc.save_thermal_calibrations(old, tmp_path / "old.json")
+    code, out, err = run_cli(
+        "thermal",
+        "infield",
+        tmp_path / "taxi.csv",
+        "--calibration",
+        tmp_path / "old.json",
+        "--latitude",
+        "45",
+        "--align",
+        "0:600",
+        "--taxi",
+        f"600:{end:g}",
+        "--track-heading",
+        "30,120",
+        "--wander",
+        "0.05:20",
+        "--unit",
+        "deg/s",
+        "--seed",
+        "5",
+        "--json",
+        tmp_path / "out.json",
+    )
+    assert code == 1, err
+    assert "cross-track innovations" in out + err
+
+
 def test_a_wander_that_is_not_positive_is_refused(old):
     park = bc.simulate_park(old, seed=1, duration_s=300.0, rate_hz=5.0)
     for wander in ((0.0, 20.0), (0.5, -1.0), "x"):

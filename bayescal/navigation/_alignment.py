@@ -108,9 +108,11 @@ filter is linearized, not information: this prior is wide enough that the east l
 not it, bounds the heading at rest (at 0.01 rad the tactical park's heading intervals covered
 38 %, benchmarks/infield_taxi.py --tactical), and small enough for the small-angle model."""
 HEADING_SWAY = 2e-5
-"""sd of a parked vehicle's heading about its mean, rad (4 arcsec: wind and people aboard), the
-noise of the zero-rate update on the heading. Over a 20-minute park at one measurement a second
-it limits the vertical bias to 3e-4 deg/h, a tenth of a navigation-grade gyro's ARW limit."""
+"""sd of a parked vehicle's heading about its mean over one STEP_S, rad (4 arcsec: wind and
+people aboard), the noise of the zero-rate update on the heading; a step of another length
+scales its variance by STEP_S / step (a white sway averaged over the step), so that measuring
+more often tells no more. Over a 20-minute park it limits the vertical bias to 3e-4 deg/h, a
+tenth of a navigation-grade gyro's ARW limit."""
 HEADING_CHANGE_SCALE = 1e-4
 """The heading change's scale, rad (its size at navigation grade over a park)."""
 LEG_SIGMAS = 3.0
@@ -544,7 +546,7 @@ def fine_alignment(
         )
         n = len(layout.names)
         variances = np.full(measured.shape[1], velocity_noise**2)
-        variances[2] = HEADING_SWAY**2
+        variances[2] = HEADING_SWAY**2 * STEP_S / step_s
         space = StateSpace(
             jnp.concatenate([jnp.eye(n)[None], transition]),
             jnp.concatenate([jnp.zeros((1, n, n)), process]),

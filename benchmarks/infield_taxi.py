@@ -4,7 +4,7 @@ cover, how far the taxi narrows the east bias level, the ablations, and what the
 in free inertial navigation.
 
     nice -n 10 python benchmarks/infield_taxi.py [--scenarios 100] [--rate 100] [--seed 0]
-        [--aging 4] [--tactical]
+        [--aging 4] [--tactical] [--park-s 1200] [--warmup 20:38.6]
 
 Each scenario: benchmarks/infield_alignment.py's park (navigation grade, 20 minutes, latitude
 45 deg, heading 30 deg, warming 20 -> 38.6 degC), aged by ``--aging`` times the calibration's
@@ -31,6 +31,8 @@ and new); the horizontal position error after 1 h of free inertial navigation (p
 250 m/s turning 90 deg every 15 min; ``InFieldUpdate.position_error``) with the old and the
 updated calibrations, the gyros at the park's mean temperature and at the taxi's end, and how
 often the posterior's predicted 90 % region (chi^2, 2 dof) holds the realised error.
+``--park-s`` and ``--warmup`` change the park's length and its temperatures (start:end, degC):
+what the data must span for the updated calibration to hold over the calibrated range.
 ``--tactical``: gyros of ARW 0.05 deg/sqrt(h) and bias instability 0.05 deg/h, calibrated
 with 10 times the navigation grade's sds.
 """
@@ -88,6 +90,8 @@ def park_truth(park, rate: float) -> dict:
 def summarize(park, result, seconds: float, rate: float, final_heading: float) -> dict:
     truth = park_truth(park, rate)
     row = {"seconds": seconds, "passed": result.passed}
+    legs = result.checks["taxi_innovations"]
+    row["leg_nis"] = max((leg["sum_nis"] / leg["dof"] for leg in legs), default=math.nan)
     for direction in ("north", "east"):
         entry = result.projections[direction]["level"]
         row[direction] = (
@@ -119,6 +123,9 @@ def payoff(park, result, old) -> dict:
     """Steps m-q: each gyro's bias error over RANGE (old, Bayesian, classical; RMS, deg/h) and
     the 1 h horizontal position error (old, updated, m) with the posterior's prediction."""
     row = {}
+    park_n = int(np.searchsorted(park.recording.columns["time"], park.truth["park_s"]))
+    record = park.recording.columns["temperature"]
+    span = np.linspace(record[:park_n].min(), record[:park_n].max(), 61)
     for name in GYROS:
         true = park.gyro_bias(name, RANGE)
         errors = {
@@ -130,8 +137,16 @@ def payoff(park, result, old) -> dict:
             powers = (RANGE[:, None] - old[name].reference) ** np.arange(old[name].degree + 1)
             errors["classical"] = powers @ classical["coefficients"]
         row[name] = {k: 3600 * float(np.sqrt(np.mean((v - true) ** 2))) for k, v in errors.items()}
-    park_n = int(np.searchsorted(park.recording.columns["time"], park.truth["park_s"]))
-    record = park.recording.columns["temperature"]
+        # What the posterior itself predicts for that RMS, and the errors over the park's own
+        # temperatures (no extrapolation).
+        row[name]["bayes predicted"] = 3600 * float(
+            np.sqrt(np.mean(result.calibration[name].bias(RANGE)[1] ** 2))
+        )
+        inside = park.gyro_bias(name, span)
+        for key, calibration in (("old", old[name]), ("bayes", result.calibration[name])):
+            row[name][f"{key} in span"] = 3600 * float(
+                np.sqrt(np.mean((calibration.bias(span)[0] - inside) ** 2))
+            )
     for label, temperature in (("park mean", record[:park_n].mean()), ("taxi end", record[-1])):
         true = np.array([float(park.gyro_bias(name, temperature)) for name in GYROS])
         used = {
@@ -153,14 +168,22 @@ def payoff(park, result, old) -> dict:
     return row
 
 
-def one_scenario(seed: int, old, rate: float, aging: float, gyro_noise=None) -> dict:
+def one_scenario(
+    seed: int, old, rate: float, aging: float, gyro_noise=None, park: dict | None = None
+) -> dict:
     import bayescal as bc
     from bayescal.navigation import _alignment
 
     taxi = bc.Taxi(legs=LEGS, speed=10.0)
     parks = {
         aged: bc.simulate_park(
-            old, aging=aged, rate_hz=rate, taxi=taxi, gyro_noise=gyro_noise, seed=seed
+            old,
+            aging=aged,
+            rate_hz=rate,
+            taxi=taxi,
+            gyro_noise=gyro_noise,
+            seed=seed,
+            **(park or {}),
         )
         for aged in (aging, 0.0)
     }
@@ -219,6 +242,17 @@ def report(name: str, rows: list[dict]) -> None:
         f"{', '.join(f'{g[-1]} {100 * per_gyro[:, i].mean():.0f}' for i, g in enumerate(GYROS))}"
         f" %; per coefficient {', '.join(f'{100 * c:.0f}' for c in coefficients.mean(axis=0))} %)"
     )
+    passed = np.array([row["passed"] for row in rows])
+    leg_nis = np.array([row["leg_nis"] for row in rows])
+    if np.isfinite(leg_nis).any():
+        covered = column("heading", 3)
+        print(
+            f"  taxi legs' NIS / dof: median {np.nanmedian(leg_nis):.2f}, max "
+            f"{np.nanmax(leg_nis):.2f}; checks failed in {np.sum(~passed)} runs; heading "
+            f"covered in {100 * covered[passed].mean() if passed.any() else math.nan:.0f} % "
+            f"of the passed, {100 * covered[~passed].mean() if (~passed).any() else math.nan:.0f}"
+            " % of the failed"
+        )
     correlation = np.array([row["correlation"] for row in rows])
     seconds = np.array([row["seconds"] for row in rows])
     print(
@@ -237,6 +271,10 @@ def report_payoff(rows: list[dict]) -> None:
             f"  {name} bias RMS error over 15-45 degC: old {rms['old']:.3g}, updated "
             f"{rms['bayes']:.3g} deg/h (updated / old {rms['bayes'] / rms['old']:.2f}; per "
             f"scenario median {np.median(errors['bayes'] / errors['old']):.2f})"
+        )
+        line += (
+            f"; the posterior's own RMS sd {rms['bayes predicted']:.3g} deg/h; over the park's "
+            f"temperatures only: updated / old {rms['bayes in span'] / rms['old in span']:.2f}"
         )
         if "classical" in rms:
             line += (
@@ -265,7 +303,11 @@ def main() -> None:
     parser.add_argument("--every", type=int, default=10, help="report every this many")
     parser.add_argument("--aging", type=float, default=4.0, help="in the old sd of c0")
     parser.add_argument("--tactical", action="store_true", help="ARW 0.05 deg/sqrt(h) gyros")
+    parser.add_argument("--park-s", type=float, default=1200.0, help="the park's length, s")
+    parser.add_argument("--warmup", default="20:38.6", help="START:END degC over the park")
     args = parser.parse_args()
+    start, end = (float(x) for x in args.warmup.split(":"))
+    park = {"duration_s": args.park_s, "warmup": (start, end)}
     from bayescal.capabilities._examples import example_gyro_calibrations
 
     old = example_gyro_calibrations()
@@ -274,7 +316,7 @@ def main() -> None:
         old, noise = tactical(old), TACTICAL_GYRO
     results: dict[str, list] = {}
     for index in range(args.scenarios):
-        rows = one_scenario(args.seed + index, old, args.rate, args.aging, noise)
+        rows = one_scenario(args.seed + index, old, args.rate, args.aging, noise, park)
         for name, row in rows.items():
             results.setdefault(name, []).append(row)
         if (index + 1) % args.every == 0 or index + 1 == args.scenarios:

@@ -8,10 +8,11 @@ since the calibration (:mod:`bayescal.inference._infield`), and the patent's cla
 rates block by block (:mod:`bayescal.navigation._tilt_rates`) beside it.
 
 What the alignment can tell (NAVIGATION.md): the north-projected bias and the north and east
-projections of the thermal slope; not the east bias level, which at rest is one quantity with
-the heading error (its interval stays as wide as the prior), nor the vertical gyro, which is
-reported "not informed" and keeps its old calibration. A gyro whose axis lies within 60 deg of
-the vertical counts as vertical.
+projections of the thermal slope, and the down-projected bias through the computed heading's
+turn over the park (a still vehicle does not turn: the vertical gyro); not the east bias
+level, which at rest is one quantity with the heading error (its interval stays as wide as the
+prior) until a taxi tells the heading. A gyro whose axis lies within 60 deg of the vertical
+counts as vertical (the patent's tilt rates leave it out).
 """
 
 import math
@@ -53,6 +54,7 @@ from ._infield_summary import (
     classical,
     informed_axes,
     innovation_check,
+    leg_innovation_checks,
     points,
     projection,
     projections,
@@ -76,8 +78,8 @@ class InFieldUpdate:
     Attributes
     ----------
     calibration : dict
-        Channel -> its :class:`~bayescal.ThermalCalibration`: updated for the gyros the
-        alignment informs, the old one (its provenance noting why) for the vertical gyro.
+        Channel -> its updated :class:`~bayescal.ThermalCalibration` (its provenance saying
+        how the alignment informed it).
     heading_error : dict
         The heading error at the window's end (the taxi's end when there is one), computed
         minus true: ``mean``, ``sd``, ``q05``, ``q95`` in degrees, and its posterior
@@ -91,9 +93,10 @@ class InFieldUpdate:
         heading term per block, and each gyro's points (its vertical part taken as the old
         calibration's).
     checks : dict
-        ``passed``, ``failures``, the sampler's checks and the velocity innovations' check.
+        ``passed``, ``failures``, the sampler's checks, the velocity innovations' check and
+        each taxi leg's cross-track innovations' check (``taxi_innovations``).
     axes : dict
-        Channel -> whether the alignment informs it, and why.
+        Channel -> whether the alignment informs it (every gyro), and how.
     projections : dict
         The north, east and down projections of the gyro biases: ``level`` (mean over the
         alignment), ``level_at_reference`` (at each gyro's T0: the polynomials' constant) and
@@ -113,8 +116,7 @@ class InFieldUpdate:
         The draws behind it (the drift scale and every state at the alignment's end).
     coefficient_draws : dict
         Channel -> the joint posterior's draws of its polynomial's coefficients (draws,
-        degree + 1), the calibrations' units: the vertical gyro's are its old calibration and
-        the aging (the alignment barely informs them), and the draws keep the correlations
+        degree + 1), the calibrations' units; the draws keep the correlations
         between the gyros that the per-gyro calibrations drop.
     """
 
@@ -373,7 +375,7 @@ def infield_update(
     >>> update.projections["north"]["level"]["sd"]  # deg/h  # doctest: +SKIP
     0.0037
     >>> update.axes["gyro_z"]["informed_by_alignment"]  # doctest: +SKIP
-    False
+    True
     >>> update.save("new.json")  # doctest: +SKIP
     """
     latitude = check_latitude(latitude)
@@ -484,6 +486,15 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
             f"99.9 % chi^2 limit {innovations['upper_limit']:.4g}: the vehicle swayed or moved, "
             "or the noise is larger than the model holds"
         )
+    legs = leg_innovation_checks(posterior.filtered, alignment.legs, context["headings"])
+    failures += [
+        f"the cross-track innovations on the {leg['track_heading_deg']:g} deg leg (sum of NIS "
+        f"{leg['sum_nis']:.4g} over {leg['dof']} steps) exceed the 99.9 % chi^2 limit "
+        f"{leg['upper_limit']:.4g}: the taxi holds more than its model (wander, track, "
+        "linearization), and the heading it tells would be overconfident"
+        for leg in legs
+        if not leg["passed"]
+    ]
     coarse, final, park_attitude = (
         dict(
             zip(
@@ -494,7 +505,7 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
         )
         for c in (alignment.coarse_attitude, final_attitude, attitude)
     )
-    notes = calibration_notes(old, heat, axes, posterior.drift, context)
+    notes = calibration_notes(old, heat, context)
     if taxi is not None and not told:
         notes.append(taxi["why"])
     east, east_old = projection(alignment.layout, priors, old, park_heat, attitude, 1, "level")
@@ -516,13 +527,14 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
         },
         points=points(alignment, old, park_heat, posterior, si),
         classical=classical(
-            alignment, old, park_heat, attitude, latitude, gravity, si, axes, park_heading
+            alignment, old, park_heat, attitude, latitude, gravity, si, park_heading
         ),
         checks={
             "passed": not failures,
             "failures": failures,
             "sampler": sampler,
             "innovations": innovations,
+            "taxi_innovations": legs,
         },
         axes=axes,
         projections=projections(alignment, priors, old, park_heat, posterior, attitude, told),

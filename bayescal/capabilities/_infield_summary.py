@@ -23,7 +23,8 @@ from ._thermal import provenance_step
 
 INFORMED_HORIZONTAL = 0.5
 """A gyro axis whose horizontal part (sin of its angle from the vertical) is below this is the
-vertical gyro: the alignment does not inform it."""
+vertical gyro: the park's heading change, not its tilt rates, tells it, and the patent's
+block-by-block tilt rates leave it out."""
 DEG_PER_HOUR = math.radians(1) / 3600
 """rad/s per deg/h."""
 
@@ -81,7 +82,7 @@ def projections(alignment, priors, old, heat, posterior, attitude, east_informed
     informed = {
         "north": {"level": True, "level_at_reference": True, "slope": True},
         "east": {"level": east_informed, "level_at_reference": east_informed, "slope": True},
-        "down": {"level": False, "level_at_reference": False, "slope": False},
+        "down": {"level": True, "level_at_reference": True, "slope": True},
     }
     found = {}
     for row, direction in enumerate(informed):
@@ -130,13 +131,14 @@ def points(alignment, old, heat, posterior, si: float) -> dict:
     return found
 
 
-def classical(alignment, old, heat, attitude, latitude, gravity: float, si: float, axes, heading):
+def classical(alignment, old, heat, attitude, latitude, gravity: float, si: float, heading):
     """The patent's pipeline, classically: the tilt rates block by block
     (:mod:`bayescal.navigation._tilt_rates`) as north and east points, the east ones with the
     heading error's Earth-rate equivalent taken off (steps m-n: ``heading``, computed minus true
     at the park's end, rad, the taxi's estimate; None when no taxi told it, and nothing is taken
     off), as each gyro's points (its vertical part from the old calibration), and each
-    horizontal gyro's old and new calibration interpolated by their weights (step o)."""
+    horizontal gyro's old and new calibration interpolated by their weights (step o; the
+    vertical gyro, INFORMED_HORIZONTAL, has no tilt rate of its own)."""
     park = alignment.park_steps
     rows = tilt_rate_points(
         alignment.times[:park], alignment.trajectory.velocity[:park, :2], latitude, gravity
@@ -162,7 +164,7 @@ def classical(alignment, old, heat, attitude, latitude, gravity: float, si: floa
                 }
             )
         found[name] = {"points": points, "unit": calibration.unit}
-        if axes[name]["informed_by_alignment"]:
+        if math.hypot(attitude[0, axis], attitude[1, axis]) >= INFORMED_HORIZONTAL:
             coefficients, covariance = interpolate_calibration(
                 [p["temperature"] for p in points],
                 [p["bias"] for p in points],
@@ -228,13 +230,14 @@ def updated(calibration, draws, si: float, heat, step: dict, sampler: dict, drif
 
 
 def informed_axes(attitude, names, taxi: bool = False) -> dict:
-    """Per gyro (``names`` in x, y, z order), whether the alignment informs it: its axis's
-    horizontal part at C_b^n ``attitude`` against INFORMED_HORIZONTAL, and why."""
+    """Per gyro (``names`` in x, y, z order), how the alignment informs it: through the tilt
+    rates where its axis's horizontal part at C_b^n ``attitude`` reaches INFORMED_HORIZONTAL,
+    through the park's heading change where it does not (the vertical gyro); and why. Every
+    gyro is updated."""
     axes = {}
     for axis, name in enumerate(names):
         horizontal = math.hypot(attitude[0, axis], attitude[1, axis])
         tilt = math.degrees(math.asin(min(1.0, horizontal)))
-        informed = horizontal >= INFORMED_HORIZONTAL
         why = (
             f"{tilt:.0f} deg from the vertical: its bias projects on north and east, so the "
             "north projection and the thermal slopes are informed; "
@@ -244,11 +247,12 @@ def informed_axes(attitude, names, taxi: bool = False) -> dict:
                 else "the east level is one quantity with the heading error (kept at its prior "
                 "until a taxi or a heading reference)"
             )
-            if informed
-            else f"{tilt:.0f} deg from the vertical: the alignment sees a vertical gyro's bias "
-            "only through the heading's slow drift, which the east bias hides; not updated"
+            if horizontal >= INFORMED_HORIZONTAL
+            else f"{tilt:.0f} deg from the vertical: a still vehicle does not turn, so the "
+            "computed heading's turn over the park is its bias (level and thermal slope, to "
+            "about ARW / sqrt(park))"
         )
-        axes[name] = {"informed_by_alignment": informed, "updated": informed, "why": why}
+        axes[name] = {"informed_by_alignment": True, "updated": True, "why": why}
     return axes
 
 
@@ -296,9 +300,41 @@ def innovation_check(filtered) -> dict:
     return {"sum_nis": total, "dof": dof, "upper_limit": limit, "passed": total <= limit}
 
 
+def leg_innovation_checks(filtered, legs, headings) -> list[dict]:
+    """The cross-track innovations of each taxi leg against the chi^2 their model gives them
+    (the sum of the normalized innovations over the leg's steps, its 99.9 % point): a leg
+    whose residuals exceed their predicted spread holds more than the model (a wander larger
+    or slower than assumed, a track off the given heading, a linearization that does not
+    hold), and the heading it tells is then narrower than the data allow."""
+    from scipy import stats
+
+    if legs is None:
+        return []
+    nis = np.asarray(filtered.normalized_innovation)
+    observed = np.asarray(filtered.observed)
+    found = []
+    for index, heading in enumerate(headings):
+        on = np.asarray(legs) == index
+        dof = int(np.sum(observed[on]))
+        if dof == 0:
+            continue
+        total = float(np.sum(nis[on]))
+        limit = float(stats.chi2.ppf(0.999, dof))
+        found.append(
+            {
+                "track_heading_deg": heading,
+                "sum_nis": total,
+                "dof": dof,
+                "upper_limit": limit,
+                "passed": total <= limit,
+            }
+        )
+    return found
+
+
 def calibrations(alignment, posterior, old, heat, axes, sampler, drift, context) -> dict:
-    """Each gyro's calibration after the alignment: updated where it informs the gyro, kept
-    (its provenance saying why) where it does not."""
+    """Each gyro's calibration after the alignment, its provenance saying how the alignment
+    informed it."""
     new = {}
     for axis, (name, calibration) in enumerate(old.items()):
         step = provenance_step(
@@ -316,24 +352,14 @@ def calibrations(alignment, posterior, old, heat, axes, sampler, drift, context)
                 "why": axes[name]["why"],
             },
         )
-        if axes[name]["updated"]:
-            draws = posterior.states[:, alignment.layout.coefficients[axis]]
-            new[name] = updated(
-                calibration, draws, context["si"], heat[:, axis], step, sampler, drift
-            )
-        else:
-            new[name] = replace(
-                calibration, provenance=(*calibration.provenance, step), origin=None
-            )
+        draws = posterior.states[:, alignment.layout.coefficients[axis]]
+        new[name] = updated(calibration, draws, context["si"], heat[:, axis], step, sampler, drift)
     return new
 
 
-def calibration_notes(old, heat, axes, drift, context) -> list[str]:
-    """Where the old polynomials are extrapolated, and what a kept calibration leaves out (the
-    aging the alignment shows; ``axes`` gains the kept and aged sds at T0)."""
+def calibration_notes(old, heat, context) -> list[str]:
+    """Where the old polynomials are extrapolated."""
     notes = list(context["notes"])
-    unit = context["unit"]
-    aging = math.sqrt(float(np.mean(drift**2))) / context["si"]
     for axis, (name, calibration) in enumerate(old.items()):
         outside = calibration.outside_range(heat[:, axis])
         if outside.any():
@@ -341,14 +367,5 @@ def calibration_notes(old, heat, axes, drift, context) -> list[str]:
                 f"{name}: {100 * outside.mean():.3g} % of the alignment lies outside the "
                 f"calibrated range {calibration.temperature_range}: the old polynomial is "
                 "extrapolated there"
-            )
-        if not axes[name]["updated"]:
-            kept = math.sqrt(calibration.covariance[0, 0])
-            axes[name]["kept_sd_at_reference"] = kept
-            axes[name]["aged_sd_at_reference"] = math.hypot(kept, aging)
-            notes.append(
-                f"{name} is kept as it was: its sd at T0, {kept:.3g} {unit}, leaves out the "
-                f"aging the alignment shows (s = {aging:.3g} {unit}, rms): its bias may be off "
-                f"by about {math.hypot(kept, aging):.3g} {unit}"
             )
     return notes

@@ -109,7 +109,8 @@ def _add_infield(steps) -> None:
         description="The in-field update of US 5,527,003 at rest: the recording's body rates, "
         "specific forces and gyro temperatures during an extended alignment, mechanized and "
         "filtered; the north-projected bias and the thermal slopes are updated, the east level "
-        "stays confounded with the heading error, the vertical gyro is not updated.",
+        "stays confounded with the heading error until a taxi tells the heading; the vertical gyro "
+        "from the computed heading's turn over the park.",
     )
     add_recording_arguments(infield, channel="many", window=False, temperature=True)
     infield.add_argument(

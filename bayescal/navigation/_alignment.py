@@ -17,6 +17,14 @@ velocity error, measured every ``step_s`` seconds. States, in this order:
 - per gyro i, the change delta c_i of its thermal coefficients since the calibration: its gyro
   bias error is eps_i(t) = sum_j delta c_ij (T_i(t) - T0_i)^j (the compensated output keeps
   it), entering the error model through C_b^n; constant;
+- the computed heading's change since the window's start, h . (phi - phi_0) (h:
+  :func:`heading_sensitivity` at the park's attitude): a still vehicle does not turn, so over the
+  park the computed heading's change is measured as zero to HEADING_SWAY (a zero-rate update on
+  the heading, Groves 2013 sec. 15.3.3). It is how the park sees the vertical gyro: that gyro
+  reads Omega sin L plus its bias, and the mechanization, which takes Omega sin L off, turns the
+  computed heading at the bias's rate; the velocities alone see that turn only through the
+  heading's slow effect on the east tilt, where the east bias hides it. Over a park of T
+  seconds the vertical bias's level is then known to about ARW / sqrt(T), as the north one is;
 - per gyro, w_i for the bias's instability (present when the calibration's noise has one). A
   flicker started at zero settles within seconds on an offset the polynomial's level cannot be
   told from (its variance grows as log t), then wanders: w_i starts at that offset (variance
@@ -99,6 +107,14 @@ few of its calibration's sd) leaves 5 deg at 45 deg latitude. The coarse heading
 filter is linearized, not information: this prior is wide enough that the east level's prior,
 not it, bounds the heading at rest (at 0.01 rad the tactical park's heading intervals covered
 38 %, benchmarks/infield_taxi.py --tactical), and small enough for the small-angle model."""
+HEADING_SWAY = 2e-5
+"""sd of a parked vehicle's heading about its mean over one STEP_S, rad (4 arcsec: wind and
+people aboard), the noise of the zero-rate update on the heading; a step of another length
+scales its variance by STEP_S / step (a white sway averaged over the step), so that measuring
+more often tells no more. Over a 20-minute park it limits the vertical bias to 3e-4 deg/h, a
+tenth of a navigation-grade gyro's ARW limit."""
+HEADING_CHANGE_SCALE = 1e-4
+"""The heading change's scale, rad (its size at navigation grade over a park)."""
 LEG_SIGMAS = 3.0
 """The first search for the taxi's legs allows the park's heading error this many of its sd
 beyond LEG_TOLERANCE_DEG while no leg has been found (:func:`fine_alignment`)."""
@@ -202,6 +218,8 @@ class Layout:
     """One per gyro."""
     walks: tuple[int | None, ...]
     """The index of each gyro's random walk, None where it has none."""
+    heading_change: int = 0
+    """The index of the computed heading's change since the start (module docstring)."""
     wander: slice | None = None
     """The taxi's cross-track wander and its rate (:mod:`._taxi`), None without a taxi."""
 
@@ -224,12 +242,20 @@ def _layout(priors, wander: bool = False) -> Layout:
             names.append(f"walk_{'xyz'[axis]}")
         else:
             walks.append(None)
+    heading_change = len(names)
+    names.append("heading_change")
     lateral = None
     if wander:
         lateral = slice(len(names), len(names) + 2)
         names += ["wander", "wander_rate"]
     return Layout(
-        tuple(names), slice(0, 7), slice(7, 10), tuple(coefficients), tuple(walks), lateral
+        tuple(names),
+        slice(0, 7),
+        slice(7, 10),
+        tuple(coefficients),
+        tuple(walks),
+        heading_change,
+        lateral,
     )
 
 
@@ -289,25 +315,29 @@ class FineAlignment:
     legs; None without a taxi."""
 
 
-def _measurements(layout: Layout, velocity, correction, park_steps: int, legs, taxi):
-    """The measurement rows and values at every step: the computed north and east velocity at
-    the park's steps (the vehicle is still), the computed cross-track velocity at the taxi's
+def _measurements(layout: Layout, velocity, attitude, correction, park_steps: int, legs, taxi):
+    """The measurement rows and values at every step: the computed north and east velocity and
+    the computed heading's change since the first step (from C_b^n ``attitude``) at the park's
+    steps (the vehicle is still), the computed cross-track velocity at the taxi's
     steps on a leg (:func:`~._taxi.cross_track_row`, linearized at the velocity less
     ``correction``); NaN where nothing is measured."""
     count, n = velocity.shape[0], len(layout.names)
-    rows = 2 if taxi is None else 3
+    rows = 3 if taxi is None else 4
     observation = np.zeros((count, rows, n))
     measured = np.full((count, rows), np.nan)
     observation[:park_steps, 0, VELOCITY.start] = 1.0
     observation[:park_steps, 1, VELOCITY.start + 1] = 1.0
+    observation[:park_steps, 2, layout.heading_change] = 1.0
     measured[1:park_steps, :2] = velocity[1:park_steps, :2]
+    heading = np.arctan2(attitude[:park_steps, 1, 0], attitude[:park_steps, 0, 0])
+    measured[1:park_steps, 2] = np.angle(np.exp(1j * (heading[1:] - heading[0])))
     if legs is not None:
         for k in np.flatnonzero(legs >= 0):
             across, tilt = cross_track_row(taxi.headings_deg[legs[k]], velocity[k] - correction[k])
-            observation[k, 2, VELOCITY] = across
-            observation[k, 2, TILT] = tilt
-            observation[k, 2, layout.wander.start + 1] = 1.0
-            measured[k, 2] = across @ velocity[k, :2]
+            observation[k, 3, VELOCITY] = across
+            observation[k, 3, TILT] = tilt
+            observation[k, 3, layout.wander.start + 1] = 1.0
+            measured[k, 3] = across @ velocity[k, :2]
     return observation, measured
 
 
@@ -334,11 +364,21 @@ def white_noise_density(values, rate_hz: float) -> np.ndarray:
 
 
 def _dynamics(
-    trajectory, priors, layout: Layout, size: int, count: int, height, gravity, wander, correction
+    trajectory,
+    priors,
+    layout: Layout,
+    size: int,
+    count: int,
+    height,
+    gravity,
+    wander,
+    correction,
+    heading_row,
 ):
     """F of the whole state per interval (the error model at the interval's middle, the
     temperature powers averaged over it, the velocity less ``correction``, the estimated
-    velocity error at each step), and the sensors' input matrices there."""
+    velocity error at each step; the heading change's row ``heading_row`` times the tilt's),
+    and the sensors' input matrices there."""
     middle = np.arange(count - 1) * size + size // 2
     velocity = trajectory.velocity[middle] - 0.5 * (correction[:-1] + correction[1:])
     dynamics, gyro_input, accel_input = (
@@ -360,14 +400,16 @@ def _dynamics(
         full[:, nav, layout.coefficients[axis]] = gyro_input[:, :, axis, None] * powers[:, None, :]
         if layout.walks[axis] is not None:
             full[:, nav, layout.walks[axis]] = gyro_input[:, :, axis]
+    full[:, layout.heading_change] = np.einsum("i,kij->kj", heading_row, full[:, TILT])
     if layout.wander is not None:
         full[:, layout.wander, layout.wander] = wander_model(*wander)[0]
     return full, gyro_input, accel_input
 
 
-def _noise(layout: Layout, priors, inputs, densities, accel_walk: float, wander):
+def _noise(layout: Layout, priors, inputs, densities, accel_walk: float, wander, heading_row):
     """The white noise's power spectral density matrix per interval: the gyros' and
-    accelerometers' white noise through their input matrices, the random walks'."""
+    accelerometers' white noise through their input matrices, the random walks'; the heading
+    change's, the tilt's through ``heading_row``."""
     gyro_input, accel_input = inputs
     gyro_density, accel_density = densities
     nav = layout.navigation
@@ -378,6 +420,9 @@ def _noise(layout: Layout, priors, inputs, densities, accel_walk: float, wander)
     for axis, prior in enumerate(priors):
         if layout.walks[axis] is not None:
             noise[:, layout.walks[axis], layout.walks[axis]] = prior.instability
+    change = layout.heading_change
+    noise[:, change] = np.einsum("i,kij->kj", heading_row, noise[:, TILT])
+    noise[:, :, change] = np.einsum("kji,i->kj", noise[:, :, TILT], heading_row)
     if layout.wander is not None:
         noise[:, layout.wander, layout.wander] = wander_model(*wander)[1]
     return noise
@@ -406,6 +451,7 @@ def _prior(layout: Layout, priors, reference_drift: float, duration: float, wand
     # their errors reach, 1 m and 1 cm/s.
     scale[POSITION] = 1.0
     scale[VELOCITY] = 0.01
+    scale[layout.heading_change] = HEADING_CHANGE_SCALE
     for axis, gyro in enumerate(priors):
         if layout.walks[axis] is not None:
             scale[layout.walks[axis]] = math.sqrt(
@@ -472,22 +518,40 @@ def fine_alignment(
     times = steps / rate_hz
     park_steps = int(np.sum(steps <= park_samples))
 
+    heading_row = heading_sensitivity(attitude)
+
     def assemble(correction, legs):
         full, *inputs = _dynamics(
-            trajectory, priors, layout, size, count, height, gravity, wander, correction
+            trajectory,
+            priors,
+            layout,
+            size,
+            count,
+            height,
+            gravity,
+            wander,
+            correction,
+            heading_row,
         )
-        noise = _noise(layout, priors, inputs, densities, accel_walk, wander)
+        noise = _noise(layout, priors, inputs, densities, accel_walk, wander, heading_row)
         transition, process = discretize(jnp.asarray(full), jnp.asarray(noise), step_s)
         observation, measured = _measurements(
-            layout, trajectory.velocity[steps], correction, park_steps, legs, taxi
+            layout,
+            trajectory.velocity[steps],
+            trajectory.attitude[steps],
+            correction,
+            park_steps,
+            legs,
+            taxi,
         )
         n = len(layout.names)
-        rows = measured.shape[1]
+        variances = np.full(measured.shape[1], velocity_noise**2)
+        variances[2] = HEADING_SWAY**2 * STEP_S / step_s
         space = StateSpace(
             jnp.concatenate([jnp.eye(n)[None], transition]),
             jnp.concatenate([jnp.zeros((1, n, n)), process]),
             jnp.asarray(observation),
-            jnp.broadcast_to(velocity_noise**2 * jnp.eye(rows), (count, rows, rows)),
+            jnp.broadcast_to(jnp.diag(variances), (count, *variances.shape * 2)),
         ).scaled(scale)
         return AlignmentModel(
             space=space,

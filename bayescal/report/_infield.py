@@ -42,21 +42,18 @@ def infield_text(document: dict) -> str:
                 f"    {direction:5} {kind:5}  {_interval(entry)}  {entry['prior_sd']:.2g}  {told}"
             )
     for name, axis in document["axes"].items():
-        if not axis["informed_by_alignment"]:
-            lines.append(
-                f"  {name}: not informed by the alignment, calibration kept ({axis['why']})"
-            )
-            continue
-        lines.append(f"  {name}: updated")
+        lines.append(f"  {name}: updated ({axis['why']})")
         classical = document["classical"]["axes"][name]
         for j, (value, sd, unit) in enumerate(
             zip(axis["coefficients"], axis["sd"], axis["coefficient_units"], strict=True)
         ):
-            lines.append(
-                f"    c{j} {value:.6g} +- {sd:.3g} {unit}   (the patent's pipeline: "
-                f"{classical['coefficients'][j]:.6g} +- "
+            patent = (
+                f"   (the patent's pipeline: {classical['coefficients'][j]:.6g} +- "
                 f"{classical['covariance'][j][j] ** 0.5:.3g})"
+                if "coefficients" in classical
+                else "   (the patent's pipeline leaves the vertical gyro out)"
             )
+            lines.append(f"    c{j} {value:.6g} +- {sd:.3g} {unit}{patent}")
     heading = document["classical"]["heading_error_deg"]
     lines.append(
         "  the patent's pipeline: tilt-rate points, "

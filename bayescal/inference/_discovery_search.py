@@ -462,17 +462,20 @@ def _high_band_deficit(checks: list[dict], rate_hz: float) -> bool:
 
 
 def _less_lines(context: Context) -> Context:
-    """The context of the record less its coherent spectral lines, found as the noise fit
-    finds them (the ``spectral_lines`` term, :func:`~bayescal.classical._lines.find_lines`);
-    ``context`` itself when there are none. The output filter is decided there: a line lifts
-    the white level a baseline fits to the record (a deficit near Nyquist that is none), and
-    a biquad's resonance takes a line for its peak. The grid the samples sit on is the
-    record's (the lines' removal takes the samples off it)."""
+    """The context of the record less its spectral lines, found as the noise fit finds them
+    (the ``spectral_lines`` term, :func:`~bayescal.classical._lines.find_lines`): the
+    coherent ones removed, a broadened one's band brought down to its local floor
+    (:meth:`~bayescal.classical._lines.LineSearch.flattened`); ``context`` itself when there
+    are none. The output filter is decided there: a line, coherent or broadened (a vibration
+    sampled by a clock that wanders), lifts the white level a baseline fits to the record (a
+    deficit near Nyquist that is none), and a biquad's resonance takes a line for its peak.
+    The grid the samples sit on is the record's (the lines' removal takes the samples off
+    it)."""
     data = context.data
     lines = SpectralLines.find(context.clean, data.rate_hz)
-    if not lines.coherent:
+    if not lines.found:
         return context
-    values = lines.removed(context.clean)
+    values = lines.flattened(context.clean)
     free = Context.of(eqx.tree_at(lambda d: d.values, data, values), values, values)
     free.lsb = context.lsb
     return free

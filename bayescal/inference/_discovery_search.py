@@ -255,10 +255,10 @@ def search_effects(
         if located
         else checks
     )
-    passing = {check["name"] for check in judged if check["passed"]}
 
     def answers(finding: Finding) -> bool:
         """Whether the final model without ``finding`` fails a check that passes with it."""
+        passing = {check["name"] for check in judged if check["passed"]}
         spec = before_search.spec
         for other in (*searched, *located):
             if other is not finding:
@@ -266,15 +266,24 @@ def search_effects(
         without = run_checks(fit_model(context, spec), data)
         return any(not check["passed"] for check in without if check["name"] in passing)
 
-    withdrawn = withdrawn_findings(searched, judged, data, answers)
-    if withdrawn:
-        report(f"withdrawing {', '.join(f.name for f in withdrawn)}: checks still fail there")
-        searched = [finding for finding in searched if finding not in withdrawn]
+    # Until what is left stands on the checks of the model without what was withdrawn: a
+    # withdrawn term can have hidden what the others leave (a Gauss-Markov term that took
+    # a sawtooth's harmonic, beside a sinusoid at its fundamental).
+    withdrawn = []
+    while newly := withdrawn_findings(searched, judged, data, answers):
+        report(f"withdrawing {', '.join(f.name for f in newly)}: checks still fail there")
+        withdrawn += newly
+        searched = [finding for finding in searched if finding not in newly]
         spec = before_search.spec
         for finding in searched:
             spec = spec.with_effect(finding.effect)
         current = fit_model(context, spec)
         checks = run_checks(current, data)
+        judged = (
+            run_checks(fit_model(context, current.spec.with_effect(*located)), data)
+            if located
+            else checks
+        )
     report("checking the final model")
     return SearchResult(
         context=context,

@@ -28,7 +28,12 @@ per worker. The kinds:
   noise's), none named.
 
 Prints each record and the three rates against the issue's targets (>= 9 of 10 unknowns,
->= 90 % exact, no false alarm on >= 20 clean records) with exact binomial bounds.
+>= 90 % exact, no false alarm on >= 20 clean records) with exact binomial bounds. A name
+discovery reports ``indistinguishable_from`` a term of the truth (its runner-up within log 10
+of it: on this record either explains the mismatch, and it says so) is not counted a false
+name; the in-catalogue records are also counted "exact but for a stated ambiguity" (each such
+name read as the truth's term, one to one: one term found for two is still a miss), beside
+the exact rate, which counts it a miss.
 """
 
 import argparse
@@ -193,6 +198,13 @@ def run(kind: str, seed: int) -> dict:
     started = time.perf_counter()
     found = bc.discover(values, rate, unit="deg/s", posterior=False, seed=seed)
     names = {effect.name for effect in found.effects}
+    # A name discovery itself reports indistinguishable from a term of the truth (the runner-
+    # up within log 10, said in its explanation) is an ambiguity it states, not a false name.
+    partner = {
+        effect.name: effect.evidence["indistinguishable_from"]
+        for effect in found.effects
+        if effect.evidence.get("indistinguishable_from") in truth["names"] - names
+    }
     duration = values.size / rate
     result = {
         "kind": kind,
@@ -201,7 +213,8 @@ def run(kind: str, seed: int) -> dict:
         "rate": rate,
         "found": sorted(names),
         "seconds": time.perf_counter() - started,
-        "false_name": sorted(names - truth["allowed"]),
+        "false_name": sorted(names - truth["allowed"] - set(partner)),
+        "ambiguous": sorted(f"{name}|{other}" for name, other in partner.items()),
     }
     if truth["where"] is not None:
         result["located"] = located(found.unexplained, truth["where"], duration)
@@ -209,6 +222,9 @@ def run(kind: str, seed: int) -> dict:
         result["where"] = (found.unexplained or {}).get("where", "-")
     else:
         result["ok"] = truth["names"] <= names <= truth["allowed"]
+        # Exact once each stated ambiguity is read as the truth's term: the names, one to one.
+        read = {partner.get(name, name) for name in names}
+        result["ok_or_ambiguous"] = truth["names"] <= read <= truth["allowed"]
     return result
 
 
@@ -253,7 +269,8 @@ def main() -> int:
             print(
                 f"  {index:3d} {kind:<30} {result['minutes']:4.1f} min {result['rate']:4.0f} Hz "
                 f"found {','.join(result['found']) or '-':<32} {'ok ' if result['ok'] else 'NO '}"
-                f"{result['seconds']:5.1f} s  {result.get('where', '')}",
+                f"{result['seconds']:5.1f} s  {result.get('where', '')}"
+                + (f" ambiguous {','.join(result['ambiguous'])}" if result["ambiguous"] else ""),
                 flush=True,
             )
     print(f"\n{len(results)} records, {time.perf_counter() - started:.0f} s")
@@ -267,6 +284,12 @@ def main() -> int:
         if not chosen:
             continue
         print(f"  {title}: {_bounds(sum(r['ok'] for r in chosen), len(chosen))}")
+        if members == SINGLE:
+            stated = sum(r["ok_or_ambiguous"] for r in chosen)
+            print(
+                "  ... exact or exact but for an ambiguity discovery states (a name reported "
+                f"indistinguishable_from the truth's term): {_bounds(stated, len(chosen))}"
+            )
         for kind in members:
             some = [r for r in chosen if r["kind"] == kind]
             misses = [f"{r['found'] or '-'} at {r.get('where', '')}" for r in some if not r["ok"]]

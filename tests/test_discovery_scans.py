@@ -154,3 +154,18 @@ def test_a_line_left_is_advised_a_longer_record_only_beside_a_fitted_one():
     beside = _mismatch(check, 100.0, duration, False, (12.3 + 2 / duration,))
     assert "longer record" not in alone["advice"]
     assert "longer record separates the two" in beside["advice"]
+
+
+def test_a_line_in_a_withdrawn_sinusoids_family_is_a_periodic_waveform():
+    """A sawtooth's second harmonic (0.0218 Hz) left beside the sinusoid withdrawn at its
+    fundamental (0.0109 Hz, a 92 s cycle): reported as a periodic waveform at the
+    fundamental, with no advice to record longer; a line at no multiple of it stays a line."""
+    from bayescal.capabilities._discovery_unexplained import _mismatch
+
+    duration = 18 * 60.0
+    check = {"name": "spectral_line", "p_value": 1e-9, "location": {"frequency_hz": 0.02177}}
+    entry = _mismatch(check, 100.0, duration, False, (), (0.010886,))
+    assert entry["shape"] == "periodic waveform" and entry["harmonic"] == 2
+    assert entry["fundamental_hz"] == 0.010886 and "longer record" not in entry["advice"]
+    apart = {"name": "spectral_line", "p_value": 1e-9, "location": {"frequency_hz": 0.0163}}
+    assert _mismatch(apart, 100.0, duration, False, (), (0.010886,))["shape"] == "line"

@@ -100,6 +100,32 @@ def test_a_broadened_line_is_its_power_and_width_and_is_left_out():
     assert np.all(left.count > 0)
 
 
+def test_a_broadened_line_flattened_leaves_the_white_level():
+    """A line sampled by a clock that wanders (discovery's time-stamp jitter) is broadened;
+    the record with its band brought down to the floor (what the output filter is decided
+    on) has the white noise's variance again (but for the line's wings beyond its band), a
+    band power at the floor, and the spectrum outside the band untouched — so the line cannot
+    lift the white level into a deficit near Nyquist that a filter would be named for."""
+    rng = np.random.default_rng(8)
+    t = np.arange(SAMPLES) / RATE
+    white = 0.05 * rng.standard_normal(SAMPLES)
+    clock = np.cumsum(rng.standard_normal(SAMPLES)) * 0.5 / 6.5 / np.sqrt(SAMPLES)
+    values = white + 0.1 * np.sin(2 * np.pi * 6.5 * (t + clock))
+    search = find_lines(values, RATE)
+    assert [line.broadened for line in search.lines] == [True], search.lines
+    flat = search.flattened(values)
+    # What is left is the line's wings beyond its band (below twice the floor): a few %.
+    assert abs(flat.var() - white.var()) < 0.05 * (values.var() - white.var())
+    spectrum = np.abs(np.fft.rfft(flat - flat.mean())) ** 2
+    before = np.abs(np.fft.rfft(values - values.mean())) ** 2
+    frequency = np.fft.rfftfreq(SAMPLES, 1 / RATE)
+    low, high = search.lines[0].band_hz
+    inside = (frequency >= low) & (frequency <= high)
+    floor = search.lines[0].floor * SAMPLES * RATE / 2
+    assert abs(spectrum[inside].mean() / floor - 1) < 1e-9
+    assert np.allclose(spectrum[~inside][1:], before[~inside][1:])
+
+
 def test_a_line_in_the_filters_stop_band_is_named_aliased():
     """Behind a low-pass at 10 Hz, a strong line at 40 Hz cannot have passed it: aliased."""
     noise = bc.NoiseModel(

@@ -31,15 +31,38 @@ def _slowest_period(check: dict) -> float | None:
     return None
 
 
+def _fundamental(frequency: float, withdrawn_hz: tuple, duration_s: float) -> tuple | None:
+    """(fundamental, harmonic): where the line at ``frequency`` (Hz) and a sinusoid the
+    search withdrew (``withdrawn_hz``: it left a line of its own family failing) are one
+    frequency and a whole multiple of the other, within :data:`SAME_LINE_BINS` resolutions
+    (1 / ``duration_s``): the harmonics of one periodic waveform that is not a sine (a
+    sawtooth, a controller's cycle), the lower the fundamental; None otherwise."""
+    tolerance = SAME_LINE_BINS / duration_s
+    for line in withdrawn_hz:
+        low, high = sorted((frequency, line))
+        harmonic = max(round(high / low), 1)
+        if abs(high - harmonic * low) <= tolerance:
+            return low, round(frequency / low)
+    return None
+
+
 def _mismatch(
-    check: dict, rate_hz: float, duration_s: float, in_time: bool, lines_hz: tuple = ()
+    check: dict,
+    rate_hz: float,
+    duration_s: float,
+    in_time: bool,
+    lines_hz: tuple = (),
+    withdrawn_hz: tuple = (),
 ) -> dict:
     """One failing check of the final model described for a user: where (time and/or
     frequency), what it looks like, how large, and what to do about it. ``in_time``: a scan
     located a departure in time, which is then what a slow mismatch of the spectrum or the
     Allan deviation is (not too little data). ``lines_hz``: the sinusoids' frequencies the
-    search fitted (Hz); a line left within :data:`SAME_LINE_BINS` resolutions (1 / duration)
-    of one is the only line a longer record is advised for (it would separate the two)."""
+    search named (Hz); a line left within :data:`SAME_LINE_BINS` resolutions (1 / duration)
+    of one is the only line a longer record is advised for (it would separate the two).
+    ``withdrawn_hz``: the sinusoids it withdrew; a line of one's harmonic family is a
+    periodic waveform that is not a sine (:func:`_fundamental`), reported at its
+    fundamental with no sinusoid named."""
     name, where = check["name"], check["location"]
     entry = {"check": name, "band": check_band(check, rate_hz), "p_value": check["p_value"]}
     slowest_s = _slowest_period(check)
@@ -97,6 +120,23 @@ def _mismatch(
                     "and stayed: the sensor's mode, supply or mounting changed then (or its "
                     "time stamps: jitter shows as noise); analyse the parts apart"
                 )
+        case "spectral_line" if _fundamental(where["frequency_hz"], withdrawn_hz, duration_s):
+            frequency = where["frequency_hz"]
+            fundamental, harmonic = _fundamental(frequency, withdrawn_hz, duration_s)
+            entry |= {
+                "shape": "periodic waveform",
+                "frequency_hz": frequency,
+                "fundamental_hz": fundamental,
+                "harmonic": harmonic,
+            }
+            entry["advice"] = (
+                f"a periodic waveform that is not a sine: a line at {frequency:.6g} Hz "
+                f"(harmonic {harmonic}) of a fundamental at {fundamental:.6g} Hz (period "
+                f"{1 / fundamental:.4g} s), whose sinusoid explained its own line but left "
+                "its harmonics: a sawtooth or a switching controller's cycle (a thermostat, "
+                "a heater's duty cycle); look for a source with that period, and fit its "
+                "waveform (a sum of its harmonics), not one sinusoid"
+            )
         case "spectral_line":
             frequency = where["frequency_hz"]
             entry |= {"shape": "line", "frequency_hz": frequency}
@@ -227,13 +267,16 @@ def unexplained_of(result: SearchResult, still_failing: list[str]) -> dict:
     best candidate where none was decisive."""
     data = result.data
     in_time = bool({"level_scan", "variance_scan"} & set(still_failing))
-    lines_hz = tuple(
-        finding.effect.frequency_hz
-        for finding in (*result.findings, *result.withdrawn)
-        if isinstance(finding.effect, Sinusoid)
+    lines_hz, withdrawn_hz = (
+        tuple(
+            finding.effect.frequency_hz
+            for finding in findings
+            if isinstance(finding.effect, Sinusoid)
+        )
+        for findings in (result.findings, result.withdrawn)
     )
     mismatches = [
-        _mismatch(check, data.rate_hz, data.duration_s, in_time, lines_hz)
+        _mismatch(check, data.rate_hz, data.duration_s, in_time, lines_hz, withdrawn_hz)
         for check in result.final_checks
         if check["name"] in still_failing
     ]

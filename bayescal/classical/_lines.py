@@ -246,6 +246,29 @@ class LineSearch:
             return values
         return values - self.line_sum(values.size)
 
+    def flattened(self, values: np.ndarray) -> np.ndarray:
+        """``values`` less the coherent lines (:meth:`removed`) and with each broadened line's
+        band brought down to its local floor: the band's Fourier coefficients scaled by one
+        factor so that their mean power is the floor's, E|X_k|^2 = S n f_s / 2 for a one-sided
+        density S (phases and the ordinates' scatter kept). What a fit that must not read a
+        broadened line as the noise's level (the output filter's decision) looks at; NaN stays
+        NaN (the gaps are read as the mean while the band is scaled)."""
+        values = self.removed(values)
+        if not self.broadened:
+            return values
+        finite = np.isfinite(values)
+        mean = float(np.mean(values[finite]))
+        transform = np.fft.rfft(np.where(finite, values, mean) - mean)
+        frequency = np.fft.rfftfreq(values.size, 1.0 / self.rate_hz)
+        for line in self.broadened:
+            inside = (frequency >= line.band_hz[0]) & (frequency <= line.band_hz[1])
+            power = np.mean(np.abs(transform[inside]) ** 2) if inside.any() else 0.0
+            target = line.floor * values.size * self.rate_hz / 2
+            if power > target:
+                transform[inside] *= math.sqrt(target / power)
+        flat = np.fft.irfft(transform, values.size) + mean
+        return np.where(finite, flat, np.nan)
+
     def line_sum(self, n: int) -> np.ndarray:
         """The coherent lines' sum at samples 0 .. n - 1, U."""
         time = np.arange(n) / self.rate_hz

@@ -255,10 +255,10 @@ def search_effects(
         if located
         else checks
     )
-    passing = {check["name"] for check in judged if check["passed"]}
 
     def answers(finding: Finding) -> bool:
         """Whether the final model without ``finding`` fails a check that passes with it."""
+        passing = {check["name"] for check in judged if check["passed"]}
         spec = before_search.spec
         for other in (*searched, *located):
             if other is not finding:
@@ -266,15 +266,24 @@ def search_effects(
         without = run_checks(fit_model(context, spec), data)
         return any(not check["passed"] for check in without if check["name"] in passing)
 
-    withdrawn = withdrawn_findings(searched, judged, data, answers)
-    if withdrawn:
-        report(f"withdrawing {', '.join(f.name for f in withdrawn)}: checks still fail there")
-        searched = [finding for finding in searched if finding not in withdrawn]
+    # Until what is left stands on the checks of the model without what was withdrawn: a
+    # withdrawn term can have hidden what the others leave (a Gauss-Markov term that took
+    # a sawtooth's harmonic, beside a sinusoid at its fundamental).
+    withdrawn = []
+    while newly := withdrawn_findings(searched, judged, data, answers):
+        report(f"withdrawing {', '.join(f.name for f in newly)}: checks still fail there")
+        withdrawn += newly
+        searched = [finding for finding in searched if finding not in newly]
         spec = before_search.spec
         for finding in searched:
             spec = spec.with_effect(finding.effect)
         current = fit_model(context, spec)
         checks = run_checks(current, data)
+        judged = (
+            run_checks(fit_model(context, current.spec.with_effect(*located)), data)
+            if located
+            else checks
+        )
     report("checking the final model")
     return SearchResult(
         context=context,
@@ -462,17 +471,20 @@ def _high_band_deficit(checks: list[dict], rate_hz: float) -> bool:
 
 
 def _less_lines(context: Context) -> Context:
-    """The context of the record less its coherent spectral lines, found as the noise fit
-    finds them (the ``spectral_lines`` term, :func:`~bayescal.classical._lines.find_lines`);
-    ``context`` itself when there are none. The output filter is decided there: a line lifts
-    the white level a baseline fits to the record (a deficit near Nyquist that is none), and
-    a biquad's resonance takes a line for its peak. The grid the samples sit on is the
-    record's (the lines' removal takes the samples off it)."""
+    """The context of the record less its spectral lines, found as the noise fit finds them
+    (the ``spectral_lines`` term, :func:`~bayescal.classical._lines.find_lines`): the
+    coherent ones removed, a broadened one's band brought down to its local floor
+    (:meth:`~bayescal.classical._lines.LineSearch.flattened`); ``context`` itself when there
+    are none. The output filter is decided there: a line, coherent or broadened (a vibration
+    sampled by a clock that wanders), lifts the white level a baseline fits to the record (a
+    deficit near Nyquist that is none), and a biquad's resonance takes a line for its peak.
+    The grid the samples sit on is the record's (the lines' removal takes the samples off
+    it)."""
     data = context.data
     lines = SpectralLines.find(context.clean, data.rate_hz)
-    if not lines.coherent:
+    if not lines.found:
         return context
-    values = lines.removed(context.clean)
+    values = lines.flattened(context.clean)
     free = Context.of(eqx.tree_at(lambda d: d.values, data, values), values, values)
     free.lsb = context.lsb
     return free

@@ -16,7 +16,7 @@ from ..models._noise_problem import NoiseProblem
 from ..models._terms import PARAMETERS, TERMS
 from ..models._whittle import padded_index
 from ._mcmc import Diagnostics, batch_log_density, diagnose, sample_ensemble, walker_count
-from ._optimize import Mode, maxima_a_posteriori, maximum_a_posteriori
+from ._optimize import Mode, maximum_a_posteriori
 from ._traced import persistent_jit
 
 
@@ -31,28 +31,14 @@ def _scales(problem: NoiseProblem) -> list[bool]:
     return [name in scales for name in problem.parameters]
 
 
-def _starts(problem: NoiseProblem) -> tuple:
-    """The prior centres (the Allan bounds) and a point well below them, where the terms a
-    record does not hold sit."""
-    base = jnp.asarray(problem.prior.location)
-    return base, base - 3.0 * jnp.array(_scales(problem))
-
-
 def noise_mode(problem: NoiseProblem) -> Mode:
-    """The MAP from two starts (:func:`_starts`). The optimiser takes the problem in the
+    """The MAP from two starts — the prior centres (the Allan bounds) and a point well below
+    them, where the terms a record does not hold sit. The optimiser takes the problem in the
     shapes every record shares (:meth:`NoiseProblem.for_likelihood`)."""
+    base = jnp.asarray(problem.prior.location)
+    lowered = base - 3.0 * jnp.array(_scales(problem))
     return maximum_a_posteriori(
-        NoiseProblem.log_posterior, problem.for_likelihood(), _starts(problem)
-    )
-
-
-def noise_modes(problems: list[NoiseProblem]) -> list[Mode]:
-    """:func:`noise_mode` of each of ``problems``, models of one family (one prior, their
-    masks apart), in one batched solve (:func:`~._optimize.maxima_a_posteriori`)."""
-    return maxima_a_posteriori(
-        NoiseProblem.log_posterior,
-        [problem.for_likelihood() for problem in problems],
-        _starts(problems[0]),
+        NoiseProblem.log_posterior, problem.for_likelihood(), (base, lowered)
     )
 
 

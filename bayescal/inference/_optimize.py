@@ -36,9 +36,8 @@ class Mode(eqx.Module):
         return np.linalg.pinv(self.hessian)
 
 
-def _optimum(log_density, model, starts):
-    """The best of BFGS from each start, the Hessian there and whether that run converged."""
-
+@persistent_jit
+def _minimise(log_density, model, starts):
     def objective(theta, _):
         return -log_density(model, theta)
 
@@ -57,27 +56,6 @@ def _optimum(log_density, model, starts):
     return best, jax.hessian(lambda theta: objective(theta, None))(best), converged
 
 
-_minimise = persistent_jit(_optimum)
-
-
-@persistent_jit
-def _minimise_each(log_density, model, positions, varying, starts):
-    """:func:`_optimum` of ``model`` with its array leaves at ``positions`` taken in turn from
-    ``varying`` (each stacked along a first axis): one batched solve."""
-    dynamic, static = eqx.partition(model, eqx.is_array)
-    leaves, treedef = jax.tree_util.tree_flatten(dynamic)
-
-    def one(own):
-        mine = list(leaves)
-        for position, leaf in zip(positions, own, strict=True):
-            mine[position] = leaf
-        return _optimum(
-            log_density, eqx.combine(jax.tree_util.tree_unflatten(treedef, mine), static), starts
-        )
-
-    return jax.vmap(one)(varying)
-
-
 def maximum_a_posteriori(
     log_density: Callable, model, starts: tuple[jax.Array, ...] | jax.Array
 ) -> Mode:
@@ -91,31 +69,3 @@ def maximum_a_posteriori(
     starts = (starts,) if not isinstance(starts, (tuple, list)) else tuple(starts)
     best, hessian, converged = _minimise(log_density, model, tuple(jnp.asarray(s) for s in starts))
     return Mode(np.asarray(best), np.asarray(hessian), bool(converged))
-
-
-def maxima_a_posteriori(
-    log_density: Callable, models: list, starts: tuple[jax.Array, ...]
-) -> list[Mode]:
-    """:func:`maximum_a_posteriori` of each of ``models`` — of one structure, differing in a
-    few arrays (a term search's masks) — in one batched solve (``jax.vmap``): one compiled
-    call instead of one per model, where each solve's many small steps cost more in their
-    overhead than in arithmetic (on a GPU, far more). The arrays the models share are passed
-    once. Each model's optimum is its own: the batch runs until every one has converged."""
-    require_x64()
-    if len(models) == 1:
-        return [maximum_a_posteriori(log_density, models[0], starts)]
-    flat = [jax.tree_util.tree_leaves(eqx.filter(model, eqx.is_array)) for model in models]
-    first = flat[0]
-    positions = tuple(
-        index
-        for index, leaf in enumerate(first)
-        if not all(other[index] is leaf or np.array_equal(other[index], leaf) for other in flat[1:])
-    )
-    varying = tuple(jnp.stack([leaves[index] for leaves in flat]) for index in positions)
-    best, hessian, converged = _minimise_each(
-        log_density, models[0], positions, varying, tuple(jnp.asarray(s) for s in starts)
-    )
-    best, hessian, converged = (np.asarray(a) for a in (best, hessian, converged))
-    return [
-        Mode(best[index], hessian[index], bool(converged[index])) for index in range(len(models))
-    ]

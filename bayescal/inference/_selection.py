@@ -57,13 +57,7 @@ from ..models._terms import (
 )
 from ..models._whittle import SpectralSummary
 from ..models.effects._parameter import Context
-from ._noise_posterior import (
-    log_likelihood_at,
-    map_summary,
-    noise_mode,
-    noise_model,
-    noise_modes,
-)
+from ._noise_posterior import log_likelihood_at, map_summary, noise_mode, noise_model
 from ._optimize import Mode
 
 DECISIVE_LOG_BAYES_FACTOR = math.log(100.0)
@@ -150,40 +144,23 @@ class _Families:
         filters = [t for t in terms if t in FILTER_SHAPE_OF_TERM] or ["output_filter"]
         return ("white", *(t for t in CANDIDATE_TERMS if t not in FILTER_SHAPE_OF_TERM), *filters)
 
-    def _masked(self, terms: frozenset) -> NoiseProblem:
-        """The problem of model ``terms``: its family's, the other terms masked."""
-        family = self._family(terms)
-        key = family[-1]
-        if key not in self.problems:
-            prior = self.prior_of(family)
-            self.problems[key] = NoiseProblem(
-                self.spectral,
-                self.level,
-                prior,
-                lsb=np.asarray(self.lsb),
-                mask=np.ones(len(prior.parameters)),
-            )
-        problem = self.problems[key]
-        active = {p for term in terms for p in PARAMETERS_OF_TERM[term]}
-        mask = np.array([float(p in active) for p in problem.parameters])
-        return eqx.tree_at(lambda p: p.mask, problem, mask)
-
-    def fit_all(self, models) -> None:
-        """Fit the models not fitted yet, those of one family together (one batched solve,
-        :func:`noise_modes`): what the search asks of the evidence next, fitted at once."""
-        by_family: dict[str, list] = {}
-        for terms in dict.fromkeys(models):
-            if terms not in self.evidence:
-                by_family.setdefault(self._family(terms)[-1], []).append(terms)
-        for group in by_family.values():
-            problems = [self._masked(terms) for terms in group]
-            for terms, problem, mode in zip(group, problems, noise_modes(problems), strict=True):
-                self.fits[terms] = problem, mode
-                self.evidence[terms] = laplace_log_evidence(problem, mode)
-
     def log_evidence(self, terms: frozenset) -> float:
         if terms not in self.evidence:
-            masked = self._masked(terms)
+            family = self._family(terms)
+            key = family[-1]
+            if key not in self.problems:
+                prior = self.prior_of(family)
+                self.problems[key] = NoiseProblem(
+                    self.spectral,
+                    self.level,
+                    prior,
+                    lsb=np.asarray(self.lsb),
+                    mask=np.ones(len(prior.parameters)),
+                )
+            problem = self.problems[key]
+            active = {p for term in terms for p in PARAMETERS_OF_TERM[term]}
+            mask = np.array([float(p in active) for p in problem.parameters])
+            masked = eqx.tree_at(lambda p: p.mask, problem, mask)
             mode = noise_mode(masked)
             self.fits[terms] = masked, mode
             self.evidence[terms] = laplace_log_evidence(masked, mode)
@@ -283,14 +260,11 @@ def select_noise_terms(
 
     model = frozenset({"white", *base}) - set(candidates)
     while True:
-        trying = [t for t in candidates if t not in model and _fits_in(model, t)]
-        families.fit_all([model, *(_with(model, t) for t in trying)])
-        tried = {t: gain(model, t) for t in trying}
+        tried = {t: gain(model, t) for t in candidates if t not in model and _fits_in(model, t)}
         best = max(tried, key=tried.get, default=None)
         if best is None or not tried[best] >= threshold:
             break
         model = _with(model, best)
-    families.fit_all([model - {term} for term in model & set(candidates)])
     for term in sorted(model & set(candidates)):  # backward: each kept term still decisive?
         if families.log_evidence(model) - families.log_evidence(model - {term}) < threshold:
             model = model - {term}
@@ -305,7 +279,6 @@ def select_noise_terms(
         # The fit may have swapped a shape back: a reason holds only for where its term is.
         reasons = {t: r for t, r in reasons.items() if (t in model) == r.startswith("kept")}
     present = {t for t, finding in found.items() if finding.found}
-    families.fit_all([model - {t} if t in model else _with(model, t) for t in candidates])
     return TermSelection(
         terms=tuple(t for t in ALL_TERMS if t in model | present),
         trials=(
@@ -400,7 +373,6 @@ def _until_it_fits(
     problem = misfit(families.model(model))
     while problem:
         # A filter's other shapes too: the shape the evidence chose may be the misfit.
-        families.fit_all([_with(model, t) for t in candidates if t not in model])
         gains = {t: gain(model, t) for t in candidates if t not in model}
         ranked = sorted(
             (t for t in gains if math.isfinite(gains[t]) and gains[t] > -threshold),

@@ -35,8 +35,10 @@ def noise_mode(problem: NoiseProblem) -> Mode:
     """The MAP from two starts — the prior centres (the Allan bounds) and a point well below
     them, where the terms a record does not hold sit. The optimiser takes the problem in the
     shapes every record shares (:meth:`NoiseProblem.for_likelihood`)."""
-    base = jnp.asarray(problem.prior.location)
-    lowered = base - 3.0 * jnp.array(_scales(problem))
+    # numpy: each JAX operation outside a compiled function loads a kernel on a process's
+    # first call (some 8 ms each).
+    base = np.asarray(problem.prior.location, dtype=float)
+    lowered = base - 3.0 * np.array(_scales(problem), dtype=float)
     return maximum_a_posteriori(
         NoiseProblem.log_posterior, problem.for_likelihood(), (base, lowered)
     )

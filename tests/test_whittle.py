@@ -187,48 +187,6 @@ def test_padding_leaves_the_likelihood_and_serves_records_of_many_lengths(record
     assert len(shapes) == 1
 
 
-def test_a_models_own_components_give_its_log_density(record):
-    """A problem restricted to its own terms' components (NoiseProblem.restricted: what the
-    sampler and the draws take) has the log density, the pointwise likelihood and the bias
-    conditional of the problem over its family's components, where the others weigh zero;
-    and, without the Gauss-Markov term, no structure that depends on the record's length."""
-    from bayescal.models._level import bias_given_noise
-    from bayescal.models._noise_problem import NoisePrior, NoiseProblem, noise_summaries
-
-    family = ("white", "bias_instability", "rate_random_walk", "gauss_markov")
-    spectral, level = noise_summaries(record, RATE, family)
-    prior = NoisePrior(
-        np.log([5e-3, 5e-6]), np.array([4.0, 4.0]), np.asarray(1.0), ("N", "K"), "test"
-    )
-    problem = NoiseProblem(spectral, level, prior)
-    own = problem.restricted()
-    assert own.components.names == ("white", "rate_random_walk")
-    assert own.spectral.basis.shape[0] == 2 and own.level.basis.shape[0] == 2
-    assert len(spectral.components.shapes) > 20  # the Gauss-Markov grid's nodes
-    thetas = np.log([[5e-3, 5e-6], [4e-3, 2e-5], [6e-3, 1e-7]])
-    for theta in thetas:
-        np.testing.assert_allclose(
-            own.log_posterior(theta), problem.log_posterior(theta), rtol=1e-12
-        )
-        np.testing.assert_allclose(
-            own.pointwise_log_likelihood(theta),
-            problem.pointwise_log_likelihood(theta),
-            rtol=1e-12,
-        )
-    for whole, restricted in zip(
-        bias_given_noise(problem.level, problem.variances(thetas)),
-        bias_given_noise(own.level, own.variances(thetas)),
-        strict=True,
-    ):
-        np.testing.assert_allclose(restricted, whole, rtol=1e-10)
-    longer = bc.NoiseModel(rate_hz=RATE, bias=0.3, **TRUE).simulate(2**16, seed=1)
-    other = NoiseProblem(*noise_summaries(longer, RATE, family), prior).restricted()
-    assert other.components == own.components
-    assert (
-        other.components != NoiseProblem(*noise_summaries(longer, RATE, family), prior).components
-    )
-
-
 def test_expected_periodogram_kept_on_disk_is_the_computed_one(tmp_path, monkeypatch):
     """The expected periodogram read back from the trace cache's folder is the one computed,
     and a second run reads it instead of computing it."""

@@ -140,12 +140,9 @@ def sample_noise(
 ) -> NoisePosterior:
     """MAP, Laplace covariance and emcee posterior of a :class:`NoiseProblem`, checked."""
     rng = np.random.default_rng(seed)
-    # The same posterior, its family's components that weigh zero in it left out: a tenth of
-    # the cost per draw (the posterior keeps the problem whole, as the fit checks read it).
-    own = problem.restricted()
-    estimate = noise_mode(own)
+    estimate = noise_mode(problem)
     sampler, converged = sample_ensemble(
-        batch_log_density(NoiseProblem.log_posterior, own.for_likelihood()),
+        batch_log_density(NoiseProblem.log_posterior, problem.for_likelihood()),
         estimate.theta,
         estimate.covariance,
         rng,
@@ -155,12 +152,12 @@ def sample_noise(
     )
     diagnostics, kept = diagnose(sampler, problem.parameters, converged, estimate.converged)
     natural, bias_conditional = _draw_values(
-        own, jnp.asarray(kept), jax.random.PRNGKey(int(rng.integers(2**31)))
+        problem, jnp.asarray(kept), jax.random.PRNGKey(int(rng.integers(2**31)))
     )
-    pointwise, log_posterior = _draw_densities(own.for_likelihood(), jnp.asarray(kept))
+    pointwise, log_posterior = _draw_densities(problem.for_likelihood(), jnp.asarray(kept))
     pointwise = np.asarray(pointwise)[..., padded_index(problem.spectral)]
     natural = {name: np.asarray(value) for name, value in natural.items()}
-    map_values, map_sd = map_summary(own, estimate)
+    map_values, map_sd = map_summary(problem, estimate)
     summaries = {
         name: ParameterSummary(
             float(np.mean(natural[name])),

@@ -82,22 +82,6 @@ class Components(eqx.Module):
         start = sum(self.counts[:index])
         return slice(start, start + self.counts[index])
 
-    def only(self, names) -> tuple["Components", np.ndarray]:
-        """The components of those of these terms in ``names``, and where they lie here: a
-        model's own, among its family's (the others weigh zero in it)."""
-        wanted = set(names)
-        kept = [index for index, term in enumerate(self.terms) if term.name in wanted]
-        where = np.arange(len(self.shapes))
-        indices = np.concatenate(
-            [where[self.slice_of(self.terms[index].name)] for index in kept] or [where[:0]]
-        )
-        subset = Components(
-            tuple(self.terms[index] for index in kept),
-            tuple(self.shapes[index] for index in indices),
-            tuple(self.counts[index] for index in kept),
-        )
-        return subset, indices
-
     @property
     def white(self) -> int:
         """The index of the white noise's component (the rounding floor's too)."""

@@ -11,8 +11,6 @@ components of a family of terms (every candidate of a term search), a term the p
 weighing zero.
 """
 
-import dataclasses
-
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
@@ -197,32 +195,6 @@ class NoiseProblem(eqx.Module):
         return NoiseProblem(
             padded_summary(self.spectral), None, self.prior, lsb=self.lsb, mask=self.mask
         )
-
-    def restricted(self) -> "NoiseProblem":
-        """This problem with its summaries holding only its own terms' components: the same
-        log density (the family's other components weigh zero in it, :meth:`Components.
-        weights`), at a fraction of the cost — a term search's family has some sixty
-        components, the Gauss-Markov term's grid among them, a model of white noise and a
-        random walk two — and with no structure that depends on the record's duration
-        unless the model holds the Gauss-Markov term. Any components beyond the family's
-        (extra ones) are kept."""
-        components, indices = self.components.only(self.terms)
-        family = len(self.components.shapes)
-
-        def rows(basis):
-            basis = np.asarray(basis)
-            return basis[np.concatenate((indices, np.arange(family, len(basis))))]
-
-        spectral = dataclasses.replace(
-            self.spectral,
-            basis=rows(self.spectral.basis),
-            mean_basis=rows(self.spectral.mean_basis),
-            components=components,
-        )
-        level = self.level
-        if level is not None:
-            level = dataclasses.replace(level, basis=rows(level.basis))
-        return dataclasses.replace(self, spectral=spectral, level=level)
 
     def log_posterior(self, theta):
         value = self.log_prior(theta) + jnp.sum(self.pointwise_log_likelihood(theta))

@@ -16,6 +16,8 @@ process-wide choice, like the 64-bit mode: a caller's own JAX functions are then
 too, unless the caller set a cache of its own first.
 """
 
+import functools
+import hashlib
 import os
 import sys
 from pathlib import Path
@@ -47,3 +49,45 @@ def enable_caches() -> None:
     if ours and jax is not None and not jax.config.jax_compilation_cache_dir:
         jax.config.update("jax_compilation_cache_dir", str(root / "jax"))
         jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+
+
+@functools.cache
+def source_digest() -> str:
+    """The digest of bayescal's source: what is kept between runs is kept for one version of
+    the code that made it (a changed line misses and computes afresh)."""
+    digest = hashlib.sha256()
+    package = Path(__file__).resolve().parent
+    for path in sorted(package.rglob("*.py")):
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def kept_array(name: str, description: str, compute):
+    """``compute()``, a numpy array, kept between runs in the trace cache's folder
+    (:data:`TRACE_CACHE`; empty or unset: computed each time), keyed by ``description`` —
+    everything the array depends on — and bayescal's source. For arrays that depend on a
+    record's shape, not its values, and cost more to compute than to read (the expected
+    periodogram of each spectral component: a second of a first fit at 2^20 samples). An
+    unreadable entry is computed again; a folder that cannot be written only costs the next
+    run the computation."""
+    import numpy as np
+
+    folder = os.environ.get(TRACE_CACHE)
+    if not folder:
+        return compute()
+    key = hashlib.sha256(f"{description}\n{source_digest()}".encode()).hexdigest()[:32]
+    path = Path(folder) / f"{name}-{key}.npy"
+    try:
+        return np.load(path, allow_pickle=False)
+    except Exception:  # absent or unreadable: only a cache miss
+        pass
+    value = compute()
+    partial = path.with_suffix(f".{os.getpid()}.partial")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(partial, "wb") as file:
+            np.save(file, value, allow_pickle=False)
+        partial.replace(path)  # atomic: a concurrent run reads the whole file or none
+    except OSError:
+        partial.unlink(missing_ok=True)
+    return value

@@ -2,7 +2,7 @@
 imports excluded, beside allantools' ``oadev`` plus a curve fit on the same array in the same
 process (issue 38).
 
-    python benchmarks/notebook_speed.py [--sizes 1048576,8388608] [--calls 3]
+    python benchmarks/notebook_speed.py [--sizes 1048576,8388608] [--calls 3] [--json PATH]
 
 For each size, a static gyro record at 100 Hz (white noise N and a rate random walk K) is
 fitted with the defaults (``bc.fit_noise(y, rate_hz=100.0, seed=1)``: terms chosen by
@@ -21,11 +21,17 @@ then ``--calls`` calls of ``fit_noise``: the first call of a process, then later
 same record. The peer is timed again after the last call: the machine is shared, so read the
 ratios to the peer of the same process. Targets (issue 38): first call in a fresh process
 with a warm cache <= 5 s at 2^20; later calls <= 1 s at 2^20 and <= the peer at 2^23.
+
+It prints JAX's default backend and devices (a GPU is used where JAX finds one) and the load
+average; ``--json PATH`` writes every process's timings there too (after each process, so
+that a run cut short keeps its part), with the machine's description: a record of where
+each figure was measured.
 """
 
 import argparse
 import json
 import os
+import platform
 import subprocess
 import sys
 import tempfile
@@ -61,7 +67,15 @@ def child(samples: int, calls: int) -> dict:
         "terms": list(fit.terms),
         "passed": bool(fit.passed),
         "N": fit.parameters["N"].mean,
+        **_devices(),
     }
+
+
+def _devices() -> dict:
+    """JAX's default backend and its devices (imported after bayescal, as a user would)."""
+    import jax
+
+    return {"backend": jax.default_backend(), "devices": [str(d) for d in jax.devices()]}
 
 
 def run(samples: int, calls: int, cache: Path) -> dict:
@@ -80,17 +94,22 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default=f"{2**20},{2**23}")
     parser.add_argument("--calls", type=int, default=3)
+    parser.add_argument("--json", type=Path, help="write the timings there too")
     parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
         print(json.dumps(child(args.child, args.calls)))
         return
     print(f"bc.fit_noise in one process, imports excluded; {os.cpu_count()} CPU core(s)")
+    runs = []
     with tempfile.TemporaryDirectory() as folder:
         for index, samples in enumerate(int(size) for size in args.sizes.split(",")):
             first_label = "cold cache" if index == 0 else "cache warmed by the sizes before"
             for label in (first_label, "warm cache"):
                 result = run(samples, args.calls, Path(folder))
+                if not runs:
+                    print(f"JAX backend {result['backend']}: {', '.join(result['devices'])}")
+                runs.append({"samples": samples, "cache": label, "load": os.getloadavg(), **result})
                 first, *later = result["fit_s"]
                 peer = min(result["peer_s"])
                 print(
@@ -100,8 +119,13 @@ def main() -> None:
                     f"({', '.join(f'{t / peer:.1f}' for t in later)}x peer); peer "
                     f"(allantools oadev + WLS) {', '.join(f'{t:.2f}' for t in result['peer_s'])}"
                     f" s; terms {'+'.join(result['terms'])}, checks "
-                    f"{'passed' if result['passed'] else 'FAILED'}, N {result['N']:.5f}"
+                    f"{'passed' if result['passed'] else 'FAILED'}, N {result['N']:.5f}; "
+                    f"load {os.getloadavg()[0]:.1f}",
+                    flush=True,
                 )
+                if args.json is not None:
+                    machine = {"cpu_count": os.cpu_count(), "platform": platform.platform()}
+                    args.json.write_text(json.dumps({"machine": machine, "runs": runs}, indent=1))
 
 
 if __name__ == "__main__":

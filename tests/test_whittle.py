@@ -185,3 +185,24 @@ def test_padding_leaves_the_likelihood_and_serves_records_of_many_lengths(record
         for v in (record, longer)
     }
     assert len(shapes) == 1
+
+
+def test_expected_periodogram_kept_on_disk_is_the_computed_one(tmp_path, monkeypatch):
+    """The expected periodogram read back from the trace cache's folder is the one computed,
+    and a second run reads it instead of computing it."""
+    import bayescal.models._whittle as whittle
+
+    monkeypatch.setenv("BAYESCAL_TRACE_CACHE", str(tmp_path))
+    shapes = Components.of(("white", "rate_random_walk", "gauss_markov"), Context(RATE, 600.0))
+    arguments = (4096, RATE, TAPER_FRACTION, (0, 1, 5, 40, 400), shapes.shapes)
+    computed = whittle._expected_computed(*arguments[:3], np.asarray(arguments[3]), arguments[4])
+    first = _expected_periodogram.__wrapped__(*arguments)
+    assert len(list(tmp_path.glob("expected_periodogram-*.npy"))) == 1
+
+    def fails(*_):
+        raise AssertionError("computed again")
+
+    monkeypatch.setattr(whittle, "_expected_computed", fails)
+    second = _expected_periodogram.__wrapped__(*arguments)
+    np.testing.assert_array_equal(first, computed)
+    np.testing.assert_array_equal(second, computed)

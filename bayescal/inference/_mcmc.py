@@ -106,7 +106,7 @@ def batch_log_density(log_density, model, grouped: bool = False):
         theta = np.asarray(theta, dtype=float)
         if theta.shape not in specialised:
             function, leaves = over.specialised(log_density, model, theta)
-            fixed = [jax.numpy.asarray(leaf) for leaf in leaves[:-1]]
+            fixed = [jax.device_put(leaf) for leaf in leaves[:-1]]
             specialised[theta.shape] = partial(function, *fixed)
         return np.asarray(specialised[theta.shape](theta))
 

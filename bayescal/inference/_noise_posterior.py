@@ -31,11 +31,13 @@ def _scales(problem: NoiseProblem) -> list[bool]:
     return [name in scales for name in problem.parameters]
 
 
-def noise_starts(problem: NoiseProblem) -> tuple[jax.Array, jax.Array]:
+def noise_starts(problem: NoiseProblem) -> tuple[np.ndarray, np.ndarray]:
     """The MAP's two starts: the prior centres (the Allan bounds) and a point well below
     them, where the terms a record does not hold sit."""
-    base = jnp.asarray(problem.prior.location)
-    return base, base - 3.0 * jnp.array(_scales(problem))
+    # numpy: each JAX operation outside a compiled function loads a kernel on a process's
+    # first call (some 8 ms each).
+    base = np.asarray(problem.prior.location, dtype=float)
+    return base, base - 3.0 * np.array(_scales(problem), dtype=float)
 
 
 def noise_mode(problem: NoiseProblem) -> Mode:

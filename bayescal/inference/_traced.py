@@ -34,7 +34,7 @@ import equinox as eqx
 import jax
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
-from .._caches import TRACE_CACHE
+from .._caches import TRACE_CACHE, source_digest
 
 _ANNOUNCE = contextvars.ContextVar("bayescal_announce_tracing", default=None)
 """Inside :func:`announcing`: a one-item list, whether tracing was announced yet."""
@@ -160,14 +160,10 @@ def _structure(treedef, static_treedef) -> str:
 @functools.cache
 def _environment() -> str:
     """bayescal's source, the versions of the libraries traced through, and the device."""
-    source = hashlib.sha256()
-    package = Path(__file__).resolve().parents[1]
-    for path in sorted(package.rglob("*.py")):
-        source.update(path.read_bytes())
     device = jax.devices()[0]
     return "|".join(
         [
-            source.hexdigest(),
+            source_digest(),
             *(f"{name}={version(name)}" for name in _PACKAGES),
             device.platform,
             device.device_kind,

@@ -63,7 +63,9 @@ most a few percent at its end), for which FFTs are fast; a length such as 2^23 -
 otherwise cost a minute.
 """
 
+import dataclasses
 import functools
+import hashlib
 import math
 
 import equinox as eqx
@@ -72,6 +74,7 @@ import numpy as np
 from scipy import fft
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from .._caches import kept_array
 from .._errors import InputError
 from ..classical._periodogram import TAPER_FRACTION, fast_length_at_most, tukey_window
 from ..recording._series import gap_free_runs, is_spooled, read, series_size
@@ -188,6 +191,19 @@ def _all_lags_expected(autocovariance: np.ndarray, autocorrelation: np.ndarray, 
     return fft.rfft(symmetric).real[2 * index]
 
 
+def _described(shape) -> str | None:
+    """A stable description of a spectral component (a class, or a module of numbers), or
+    None where it has none."""
+    kind = shape if isinstance(shape, type) else type(shape)
+    name = f"{kind.__module__}.{kind.__qualname__}"
+    if isinstance(shape, type):
+        return name
+    values = [getattr(shape, field.name) for field in dataclasses.fields(shape)]
+    if not all(isinstance(value, (int, float, str)) for value in values):
+        return None
+    return f"{name}{tuple(values)!r}"
+
+
 @functools.lru_cache(maxsize=8)
 def _expected_periodogram(
     length: int, rate_hz: float, taper_fraction: float, index: tuple[int, ...], shapes: tuple
@@ -198,8 +214,26 @@ def _expected_periodogram(
 
     sum over lags tau of r(tau) c(tau) e^{-2 pi i nu tau} / sum h^2, with c the taper's
     autocorrelation: a few lags for the moving-average shapes, all lags (one FFT) for those
-    of long memory. Cached: it depends on the record only through its length.
+    of long memory. Cached, and kept on disk between runs (:func:`bayescal._caches.
+    kept_array`): it depends on the record only through its length, and its FFTs of every
+    long-memory component cost a first fit of 2^20 samples more than a second.
     """
+    described = [_described(shape) for shape in shapes]
+
+    def compute():
+        return _expected_computed(length, rate_hz, taper_fraction, np.asarray(index), shapes)
+
+    if None in described:
+        return compute()
+    indices = hashlib.sha256(np.asarray(index, dtype=np.int64).tobytes()).hexdigest()
+    description = f"{length}|{rate_hz!r}|{taper_fraction!r}|{indices}|{described}"
+    return kept_array("expected_periodogram", description, compute)
+
+
+def _expected_computed(
+    length: int, rate_hz: float, taper_fraction: float, index: np.ndarray, shapes: tuple
+) -> np.ndarray:
+    """:func:`_expected_periodogram`, computed."""
     taper, autocorrelation = _taper(length, taper_fraction)
     index = np.asarray(index)
     frequency = index / length

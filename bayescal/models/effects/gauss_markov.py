@@ -40,6 +40,15 @@ def _integral_fraction(x):
     return jnp.where(x < _SERIES_BELOW, series, (safe + jnp.expm1(-safe)) / safe**2)
 
 
+@jax.jit
+def _block_fractions(x):
+    """:func:`_one_period` and :func:`_integral_fraction` of the blocks' lengths in
+    correlation times, in one compiled call: a record's level summary takes them at every node
+    of the grid, and each of their two dozen operations run outside a compiled function loads
+    a kernel on a process's first call."""
+    return _one_period(x), _integral_fraction(x)
+
+
 def _lag_zero_excess(a):
     """r(0) - r(1) of :meth:`GaussMarkov.rate_autocovariance`: 2 (a - 1 + e^-a) / a^2 -
     ((1 - e^-a) / a)^2, its Taylor series for small a."""
@@ -225,9 +234,9 @@ class GaussMarkov(NoiseTerm):
         fraction = (b - a) / t
         before = np.subtract.outer(a, b)  # a_i - b_j
         gap = np.maximum(np.maximum(before, before.T), 0.0)
-        scaled = np.asarray(_one_period(fraction))  # (1 - e^(-L/T)) / (L/T)
-        apart = np.outer(scaled, scaled) * np.exp(-gap / t)
-        same = 2.0 * np.asarray(_integral_fraction(fraction))
+        scaled, integral = (np.asarray(part) for part in _block_fractions(fraction))
+        apart = np.outer(scaled, scaled) * np.exp(-gap / t)  # scaled: (1 - e^(-L/T)) / (L/T)
+        same = 2.0 * integral
         return np.where(np.equal.outer(start, start), np.diag(same), apart)
 
     @classmethod

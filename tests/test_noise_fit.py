@@ -168,6 +168,11 @@ def test_of_terms_the_evidence_cannot_tell_apart_the_simpler_is_added():
     same_size = {"bias_instability": 30.0, "rate_random_walk": 31.0, "gauss_markov": 32.0}
     assert _simplest_decisive(same_size, threshold) == "rate_random_walk"
     assert _simplest_decisive({"rate_random_walk": 4.0, "quantization": -2.0}, threshold) is None
+    # The filter's shapes are one term, its shape chosen at the end: a biquad counts as one
+    # parameter (a 5.8 s pad record's Gauss-Markov, counted against the biquad's four, took
+    # the white noise with it: N 0.001 [5e-6, 0.004] deg/s/sqrt(Hz) where the filter gave 0.040).
+    pad = {"biquad_filter": 61.0, "gauss_markov": 62.5, "output_filter": 40.0}
+    assert _simplest_decisive(pad, threshold) == "biquad_filter"
 
 
 def test_an_allan_check_with_nothing_to_test_says_so():

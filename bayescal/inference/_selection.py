@@ -300,13 +300,20 @@ def select_noise_terms(
 def _simplest_decisive(gains: dict[str, float], threshold: float) -> str | None:
     """The term to add (module docstring, Search): of the terms whose log Bayes factor is at
     least ``threshold``, those within ``threshold`` of the largest, and of them the one of
-    fewest parameters (then the largest evidence); None where no term is decisive."""
+    fewest parameters (then the largest evidence); None where no term is decisive. The output
+    filter's shapes are one term whose shape the evidence chooses at the end
+    (:func:`_best_shape`): here each counts as the simplest, the one-tap filter."""
     decisive = {t: g for t, g in gains.items() if g >= threshold}
     if not decisive:
         return None
     top = max(decisive.values())
     rivals = [t for t, g in decisive.items() if g >= top - threshold]
-    return min(rivals, key=lambda t: (len(PARAMETERS_OF_TERM[t]), -decisive[t]))
+    return min(rivals, key=lambda t: (_parameter_count(t), -decisive[t]))
+
+
+def _parameter_count(term: str) -> int:
+    """The parameters ``term`` adds, for :func:`_simplest_decisive` (a filter shape: one)."""
+    return 1 if term in FILTER_SHAPE_OF_TERM else len(PARAMETERS_OF_TERM[term])
 
 
 def _best_shape(model: frozenset, candidates, gain) -> frozenset:

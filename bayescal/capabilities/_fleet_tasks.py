@@ -175,7 +175,8 @@ def run_batched(tasks, progress: bool):
     sample_noise_each`: one vmapped MAP and one emcee run per batch), in row order, with the
     size of each result and where the work ran. A recording alone in its batch, or whose
     batched posterior failed its sampler checks (a stuck run, which the batch does not
-    restart), is fitted alone as a Dask task would fit it (:func:`fit_recording`)."""
+    restart), is sampled alone as a Dask task samples it (:func:`_fit_alone`, from what was
+    already read and summarised)."""
     import jax
 
     from ..inference._batched import sample_noise_each
@@ -206,7 +207,7 @@ def run_batched(tasks, progress: bool):
         )
         batches.setdefault(key, []).append((task, front, time.perf_counter() - begun))
     for batch in batches.values():
-        alone = [task for task, _, _ in batch] if len(batch) == 1 else []
+        alone = list(batch) if len(batch) == 1 else []
         if not alone:
             begun = time.perf_counter()
             sampler = batch[0][0].sampler
@@ -221,14 +222,14 @@ def run_batched(tasks, progress: bool):
             share = (time.perf_counter() - begun) / len(batch)
             for (task, front, own), posterior in zip(batch, posteriors, strict=True):
                 if not posterior.diagnostics.passed:
-                    alone.append(task)
+                    alone.append((task, front, own))
                     continue
                 fit = finish_noise(front, posterior, task.seed)
                 results[task.row] = _judged(fit, task, own + share)
                 if bar is not None:
                     bar.update(1)
-        for task in alone:
-            results[task.row] = fit_recording(task)
+        for task, front, own in alone:
+            results[task.row] = _fit_alone(task, front, own)
             if bar is not None:
                 bar.update(1)
     if bar is not None:
@@ -243,6 +244,28 @@ def run_batched(tasks, progress: bool):
         "wall_s": time.perf_counter() - started,
     }
     return ordered, sizes, where
+
+
+def _fit_alone(task: RecordingTask, front, seconds: float) -> RecordingDraws | RecordingFailure:
+    """A recording's posterior sampled on its own (with the restarts of a stuck run) from its
+    :func:`~._noise.prepare_noise`: what :func:`fit_recording` computes, without reading and
+    summarising the recording again; ``seconds`` already spent on it."""
+    from ..inference._noise_posterior import sample_noise
+    from ._noise import finish_noise
+
+    started = time.perf_counter()
+    try:
+        posterior = sample_noise(
+            front.problem,
+            terms=front.terms,
+            seed=task.seed,
+            n_walkers=task.sampler.n_walkers,
+            max_steps=task.sampler.max_steps,
+        )
+        fit = finish_noise(front, posterior, task.seed)
+    except BayescalError as error:
+        return _failure(task, error)
+    return _judged(fit, task, seconds + time.perf_counter() - started)
 
 
 def _refuse_unstreamed(task: RecordingTask) -> None:

@@ -30,6 +30,7 @@ from emcee.state import State
 from .._errors import InputError
 from ..models._noise_problem import NoiseProblem
 from ._mcmc import (
+    FIRST_CHUNK,
     batch_log_density,
     diagnose,
     ensemble,
@@ -39,10 +40,6 @@ from ._mcmc import (
 )
 from ._noise_posterior import NoisePosterior, noise_posterior_of, noise_starts
 from ._optimize import maximum_a_posteriori_each
-
-FIRST_CHUNK = 250
-"""Steps before the first convergence check (then a quarter of the run so far), as
-:func:`~._mcmc.sample_ensemble`."""
 
 
 def stack_problems(problems, names) -> NoiseProblem:

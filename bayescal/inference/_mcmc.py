@@ -43,6 +43,8 @@ RESTART_AFTER = (1000, 0.1)
 STRAGGLER_LOG_DENSITY = 20.0
 """A walker whose log density stays this far (plus the ensemble's own spread) below the
 median is stuck away from the posterior."""
+FIRST_CHUNK = 250
+"""Steps before the first convergence check; later checks after a quarter of the run so far."""
 
 
 class Diagnostics(eqx.Module):
@@ -149,7 +151,7 @@ def sample_ensemble(
         bar = tqdm(
             total=max_steps, desc="posterior (emcee)", unit="step", leave=False, file=sys.stderr
         )
-    longer_before, converged, chunk = False, False, 250
+    longer_before, converged, chunk = False, False, FIRST_CHUNK
     restarts, used = 0, 0
     judge_after = max(RESTART_AFTER[0], int(RESTART_AFTER[1] * max_steps))
     while used + sampler.iteration < max_steps:
@@ -170,7 +172,7 @@ def sample_ensemble(
             used += sampler.iteration
             state = _restart(sampler, rng)
             sampler = ensemble(log_posterior_batch, n_walkers, dimension, rng)
-            longer_before, chunk = False, 250
+            longer_before, chunk = False, FIRST_CHUNK
     if bar is not None:
         bar.close()
     sampler.restarts = restarts  # read by diagnose()

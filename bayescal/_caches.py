@@ -91,3 +91,43 @@ def kept_array(name: str, description: str, compute):
     except OSError:
         partial.unlink(missing_ok=True)
     return value
+
+
+MAP_LIMIT = Path("/proc/sys/vm/max_map_count")
+"""Linux's limit on a process's memory maps (65530 by default)."""
+
+
+def _memory_maps() -> int | None:
+    """How many memory maps this process holds (Linux), or None where that cannot be read."""
+    try:
+        with open("/proc/self/maps", "rb") as maps:
+            return maps.read().count(b"\n")
+    except OSError:
+        return None
+
+
+def release_compiled_code(fraction: float = 0.5) -> bool:
+    """Drop JAX's in-memory compiled functions when this process's memory maps pass
+    ``fraction`` of Linux's limit (:data:`MAP_LIMIT`); return whether they were dropped.
+
+    XLA's CPU code of one compiled function takes a handful of memory maps, a noise fit's
+    functions for one record shape about 3,200 (measured), and none are returned while JAX
+    keeps the function: a long session that fits records of twenty lengths, or a test run of
+    hundreds of models, reaches the limit, and the next compilation then dies of a
+    segmentation fault inside XLA instead of an error. Dropped (``jax.clear_caches``), a
+    function is compiled again when next called, from the on-disk caches (module docstring)
+    in about a second. A caller's own jitted functions are dropped too, and recompiled the
+    same way. Nowhere to read the maps (not Linux): nothing is done.
+    """
+    jax = sys.modules.get("jax")
+    if jax is None:
+        return False
+    try:
+        limit = int(MAP_LIMIT.read_text())
+    except (OSError, ValueError):
+        return False
+    maps = _memory_maps()
+    if maps is None or maps < fraction * limit:
+        return False
+    jax.clear_caches()
+    return True

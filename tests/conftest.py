@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from bayescal._caches import enable_caches
+from bayescal._caches import enable_caches, release_compiled_code
 
 os.environ.setdefault("JAX_PLATFORMS", "cpu")
 # The caches the command line keeps (JAX's compilations and bayescal's traced optimisers), set
@@ -40,3 +40,11 @@ def run_cli(capsys):
         return code, captured.out, captured.err
 
     return run
+
+
+def pytest_runtest_teardown(item, nextitem):
+    """Each test worker compiles thousands of models in one process; their code would pass
+    Linux's limit on memory maps near the end of a run and kill the worker inside XLA (seen:
+    a segmentation fault at 65,408 maps). The library drops it before each public fit;
+    tests that call the layers below directly are covered here."""
+    release_compiled_code()

@@ -115,3 +115,29 @@ def test_the_caches_default_to_the_users_cache_folder_and_leave_a_set_variable(
     assert os.environ[_caches.TRACE_CACHE] == str(tmp_path / "bayescal" / "traces")
     assert os.environ["JAX_COMPILATION_CACHE_DIR"] == str(tmp_path / "elsewhere")
     assert (tmp_path / "bayescal" / "jax").is_dir()
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/maps"), reason="memory maps are read on Linux")
+def test_compiled_code_is_released_before_the_process_runs_out_of_memory_maps(monkeypatch):
+    """XLA's CPU code holds memory maps until JAX drops the function: past Linux's limit
+    the next compilation dies of a segmentation fault (seen in a full test run), so a public
+    call drops them first when the maps pass the given fraction of the limit, and a
+    dropped function computes the same numbers when compiled again."""
+    import jax
+
+    from bayescal import _caches
+
+    def maps():
+        with open("/proc/self/maps") as file:
+            return sum(1 for _ in file)
+
+    vector = np.linspace(-1.0, 2.0, 7)
+    functions = [jax.jit(lambda v, k=k: jnp.sum(v ** (k % 5)) + k) for k in range(40)]
+    before = [float(f(vector)) for f in functions]
+    held = maps()
+    assert not _caches.release_compiled_code(fraction=1.0)
+    assert maps() >= held - 10
+    limit = int(_caches.MAP_LIMIT.read_text())
+    assert _caches.release_compiled_code(fraction=(held - 1) / limit)
+    assert maps() < held - 40  # forty functions' code returned
+    assert [float(f(vector)) for f in functions] == before

@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .._caches import release_compiled_code
 from .._errors import HealthCheckError, InputError
 from ..inference._discovery_fit import DiscoveryData
 from ..inference._discovery_posterior import FinalPosterior, sample_final
@@ -416,6 +417,7 @@ def discover(
     >>> [effect.name for effect in found.effects]
     ['thermal_bias']
     """
+    release_compiled_code()
     sampler = sampler_of(sampler)
     given = channel_input(y, rate_hz, unit=unit, channel=channel)
     if temperature is None:

@@ -48,6 +48,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._caches import release_compiled_code
 from .._errors import HealthCheckError, InputError
 from ..models._terms import (
     BOUNDING_FRACTION,
@@ -478,6 +479,7 @@ def filter_noise(
     >>> noise.values["gyr_n"]["unit"]
     'rad/s'
     """
+    release_compiled_code()
     chosen = find_estimator(estimator)
     fits = _fits(fit)
     if horizon is not None:

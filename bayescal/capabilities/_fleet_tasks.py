@@ -22,6 +22,7 @@ from importlib.metadata import version
 
 import numpy as np
 
+from .._caches import release_compiled_code
 from .._errors import BayescalError, InputError
 from ..inference._population import RecordingDraws
 from ..inference._sampler import Sampler
@@ -111,6 +112,7 @@ def recording_draws(fit, task: RecordingTask, seconds: float) -> RecordingDraws:
 def fit_recording(task: RecordingTask) -> RecordingDraws | RecordingFailure:
     """One Dask task: load a recording, fit its channel's noise, keep what the population
     needs; a recording that cannot be used comes back as a :class:`RecordingFailure`."""
+    release_compiled_code()
     from ._noise import fit_noise
 
     started = time.perf_counter()
@@ -177,6 +179,7 @@ def run_batched(tasks, progress: bool):
     batched posterior failed its sampler checks (a stuck run, which the batch does not
     restart), is sampled alone as a Dask task samples it (:func:`_fit_alone`, from what was
     already read and summarised)."""
+    release_compiled_code()
     import jax
 
     from ..inference._batched import sample_noise_each

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._caches import release_compiled_code
 from .._errors import HealthCheckError, InputError
 from .._output import to_jsonable
 from ..classical._gravity import normal_gravity
@@ -378,6 +379,7 @@ def infield_update(
     True
     >>> update.save("new.json")  # doctest: +SKIP
     """
+    release_compiled_code()
     latitude = check_latitude(latitude)
     window = alignment_window(align)
     taxi_window, headings = taxi_reference(taxi, track_heading, window)

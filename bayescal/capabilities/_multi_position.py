@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._caches import release_compiled_code
 from .._errors import HealthCheckError, InputError
 from ..classical._gravity import LocalGravity
 from ..classical._multi_position import (
@@ -188,6 +189,7 @@ def calibrate_multi_position(
         Too few poses or orientations, a moving section, a unit that does not fit gravity,
         poses that do not determine the calibration, Channels not on one grid.
     """
+    release_compiled_code()
     values, rate_hz, unit, start_s = _readings(values, rate_hz, unit, start_s)
     if orientations not in ORIENTATIONS:
         raise InputError(

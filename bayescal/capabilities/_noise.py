@@ -8,6 +8,7 @@ from functools import cached_property, partial
 
 import numpy as np
 
+from .._caches import release_compiled_code
 from .._errors import HealthCheckError, InputError
 from .._stages import stage
 from ..classical._noise import ClassicalNoise, classical_noise
@@ -426,6 +427,7 @@ def fit_noise(
     >>> fit.summary["N"]["unit"]
     'deg/s/sqrt(Hz)'
     """
+    release_compiled_code()
     front = _noise_input(
         y, rate_hz, terms, sensor, unit, channel, confidence, taus, sensor_fallback
     )

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._caches import release_compiled_code
 from .._errors import InputError
 from ..inference._plan import PredictedWidths, predicted_widths
 from ..models._terms import PARAMETERS, parameter_unit
@@ -156,6 +157,7 @@ def plan_recording(
     >>> plan.terms["K"].length_s > plan.duration_s  # K to +-20 % needs a longer record
     True
     """
+    release_compiled_code()
     target = dict(target or {})
     if not 0 < confidence < 1:
         raise InputError(f"confidence={confidence!r} must lie in (0, 1)")

@@ -5,6 +5,7 @@ calibration it makes is :class:`~bayescal.ThermalCalibration` (:mod:`._thermal`)
 
 import numpy as np
 
+from .._caches import release_compiled_code
 from .._errors import InputError
 from .._output import to_jsonable
 from ..classical._allan import allan_deviation
@@ -104,6 +105,7 @@ def fit_thermal(
     >>> calibration.coefficients.round(2)
     array([0.5 , 0.01])
     """
+    release_compiled_code()
     sampler = sampler_of(sampler)
     noise_terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
     if noise_terms == AUTO:

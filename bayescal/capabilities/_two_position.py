@@ -11,6 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
+from .._caches import release_compiled_code
 from .._errors import HealthCheckError, InputError
 from ..classical._allan import allan_deviation
 from ..classical._gravity import LocalGravity
@@ -296,6 +297,7 @@ def calibrate_two_position(
     >>> round(calibration.classical["scale"][0], 3)
     1.002
     """
+    release_compiled_code()
     up, down, rate_hz, unit, channel = _sections(up, down, rate_hz, unit, channel)
     terms = parse_terms(terms) if isinstance(terms, str) else check_terms(tuple(terms))
     check_sections(up, down, unit, channel)

@@ -4,6 +4,7 @@ the command line end to end, the calibration file of several channels, and bad i
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -298,9 +299,33 @@ def test_the_library_refuses_what_the_command_line_refuses(old):
     assert math.isfinite(park.truth["gravity"])
 
 
-def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_level(
-    old,
-):
+TAXI_RATE = 10.0
+
+
+@pytest.fixture(scope="module")
+def taxi_run(tmp_path_factory, old):
+    """A 10-minute park then a taxi of two legs at 10 m/s (30 deg, then 120 deg), 10 Hz: the
+    simulation, the taxi's end (s) and a folder holding it as ``taxi.csv`` with the old
+    calibration as ``old.json``."""
+    park = bc.simulate_park(
+        old,
+        seed=5,
+        duration_s=600.0,
+        rate_hz=TAXI_RATE,
+        taxi=bc.Taxi(legs=((30.0, 200.0), (120.0, 150.0))),
+    )
+    end = park.recording.columns["time"][-1] + 1 / TAXI_RATE
+    folder = tmp_path_factory.mktemp("taxi")
+    recording = park.recording
+    columns = {
+        f"{name}[{recording.header_units[name]}]": v for name, v in recording.columns.items()
+    }
+    write_csv(folder / "taxi.csv", columns)
+    bc.save_thermal_calibrations(old, folder / "old.json")
+    return park, end, folder
+
+
+def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_level(old, taxi_run):
     """A seeded small version of benchmarks/infield_taxi.py: a 10-minute park then a taxi of two
     legs at 10 m/s (30 deg, then 120 deg). Given the track headings, the filter finds both legs,
     the heading error and the east level hold the truth within 3.3 posterior sd (a 0.1 % miss
@@ -314,10 +339,7 @@ def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_lev
     taxi = load_benchmark("infield_taxi")
     park_truth, payoff = taxi.park_truth, taxi.payoff
 
-    rate = 10.0
-    taxi = bc.Taxi(legs=((30.0, 200.0), (120.0, 150.0)))
-    park = bc.simulate_park(old, seed=5, duration_s=600.0, rate_hz=rate, taxi=taxi)
-    end = park.recording.columns["time"][-1] + 1 / rate
+    park, end, _ = taxi_run
     told = bc.infield_update(
         park.recording,
         old,
@@ -336,7 +358,7 @@ def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_lev
     true_heading = (computed - park.truth["trajectory"]["heading"][-1] + 180) % 360 - 180
     heading = told.heading_error
     assert abs(heading["mean"] - true_heading) < 3.3 * heading["sd"]
-    east_truth = park_truth(park, rate)["east"]
+    east_truth = park_truth(park, TAXI_RATE)["east"]
     east, east_blind = told.projections["east"]["level"], blind.projections["east"]["level"]
     assert east["informed"] and not east_blind["informed"]
     assert abs(east["mean"] - east_truth) < 3.3 * east["sd"]
@@ -355,21 +377,15 @@ def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_lev
         assert found[flight]["mahalanobis2"] < 13.8, (flight, found[flight])
 
 
-def test_a_taxi_whose_wander_exceeds_its_model_fails_the_legs_check(run_cli, old, tmp_path):
+def test_a_taxi_whose_wander_exceeds_its_model_fails_the_legs_check(
+    run_cli, old, taxi_run, tmp_path
+):
     """The taxi of the test above, told a wander ten times smaller than the simulated one
     (0.05 m against 0.5 m): its cross-track residuals exceed their predicted spread on each leg
     (chi^2, 99.9 %), so the heading it would tell is overconfident: the result fails,
     ``.check()`` raises naming the leg, and the command line exits 1 saying so. Told the
     simulated wander, every leg passes."""
-    rate = 10.0
-    park = bc.simulate_park(
-        old,
-        seed=5,
-        duration_s=600.0,
-        rate_hz=rate,
-        taxi=bc.Taxi(legs=((30.0, 200.0), (120.0, 150.0))),
-    )
-    end = park.recording.columns["time"][-1] + 1 / rate
+    park, end, folder = taxi_run
     options = {"latitude": 45.0, "align": (0, 600), "taxi": (600, end), "seed": 5}
     options["track_heading"] = "30,120"
     narrow = bc.infield_update(park.recording, old, wander=(0.05, 20.0), **options)
@@ -380,18 +396,12 @@ def test_a_taxi_whose_wander_exceeds_its_model_fails_the_legs_check(run_cli, old
         narrow.check()
     right = bc.infield_update(park.recording, old, **options)
     assert all(leg["passed"] for leg in right.checks["taxi_innovations"])
-    recording = park.recording
-    columns = {
-        f"{name}[{recording.header_units[name]}]": v for name, v in recording.columns.items()
-    }
-    write_csv(tmp_path / "taxi.csv", columns)
-    bc.save_thermal_calibrations(old, tmp_path / "old.json")
     code, out, err = run_cli(
         "thermal",
         "infield",
-        tmp_path / "taxi.csv",
+        folder / "taxi.csv",
         "--calibration",
-        tmp_path / "old.json",
+        folder / "old.json",
         "--latitude",
         "45",
         "--align",
@@ -411,6 +421,104 @@ def test_a_taxi_whose_wander_exceeds_its_model_fails_the_legs_check(run_cli, old
     )
     assert code == 1, err
     assert "cross-track innovations" in out + err
+
+
+FIGURES = (
+    "the computed track",
+    "the tilt-rate points before and after the heading correction",
+    "the old and updated calibrations with their 90 % bands",
+    "predicted position error, old and updated",
+)
+"""The page's figures, by their alt text, in order."""
+
+
+def test_the_report_page_of_a_park_and_taxi(run_cli, taxi_run, tmp_path):
+    """``--report PAGE.html`` writes one self-contained page (no resource outside it: every
+    figure an inline PNG) holding the four figures (the track, the points before and after the
+    heading correction, the old and updated calibrations, the 1 h position error), the heading
+    error with its unit, the Earth-rate equivalent taken off and the 1 h errors in m; the JSON
+    holds the track the page draws, its steps on each leg those the filter used."""
+    _, end, folder = taxi_run
+    code, out, err = run_cli(
+        "thermal",
+        "infield",
+        folder / "taxi.csv",
+        "--calibration",
+        folder / "old.json",
+        "--latitude",
+        "45",
+        "--align",
+        "0:600",
+        "--taxi",
+        f"600:{end:g}",
+        "--track-heading",
+        "30,120",
+        "--unit",
+        "deg/s",
+        "--seed",
+        "5",
+        "--json",
+        tmp_path / "out.json",
+        "--report",
+        tmp_path / "page.html",
+    )
+    assert code == 0, err
+    assert f"report: {tmp_path / 'page.html'}" in out
+    page = (tmp_path / "page.html").read_text()
+    assert page.startswith("<!DOCTYPE html>") and page.rstrip().endswith("</html>")
+    assert not re.search(r"""(?:src|href)\s*=\s*["'](?!data:)""", page)
+    assert "<script" not in page and "<link" not in page
+    shown = re.findall(r'<img class="figure" alt="([^"]+)" src="data:image/png;base64,', page)
+    assert tuple(shown) == FIGURES
+    document = json.loads((tmp_path / "out.json").read_text())
+    heading = document["heading_error"]
+    number = r"-?\d[\d.e+-]*"
+    stated = re.search(
+        rf"<b>Heading error</b> \(computed minus true[^<]*?\): ({number}) "
+        rf"\[{number}, {number}\]&nbsp;deg",
+        page,
+    )
+    assert stated and float(stated[1]) == pytest.approx(heading["mean"], rel=1e-3)
+    assert re.search(rf"Earth-rate equivalent Ω cos L ψ = {number}&nbsp;deg/h", page)
+    assert len(re.findall(rf"<td class='num'>{number}&nbsp;m</td>", page)) == 10
+    track, taxi = document["track"], document["taxi"]
+    assert len(track["north"]) == len(track["east"]) == len(track["leg"])
+    legs = np.asarray(track["leg"])
+    assert [int(np.sum(legs == i)) for i in range(2)] == taxi["steps_on_legs"]
+    assert np.all(legs[: track["park_steps"]] == -1)
+
+
+def test_a_report_that_cannot_be_written_exits_2_and_writes_nothing(run_cli, files, tmp_path):
+    folder, _ = files
+    for page, message in (
+        (tmp_path / "missing" / "page.html", "does not exist"),
+        (tmp_path, "is a folder"),
+        (tmp_path / "out.json", "--json already writes to this file"),
+    ):
+        code, _, err = run_cli(
+            "thermal",
+            "infield",
+            folder / "park.csv",
+            "--calibration",
+            folder / "old.json",
+            "--latitude",
+            "45",
+            "--align",
+            "0:600",
+            "--unit",
+            "deg/s",
+            "--json",
+            tmp_path / "out.json",
+            "--save",
+            tmp_path / "new.json",
+            "--report",
+            page,
+        )
+        assert code == 2, err
+        assert f"--report {page}" in err and message in err, err
+        assert "Traceback" not in err
+        assert not (tmp_path / "out.json").exists() and not (tmp_path / "new.json").exists()
+        assert not (tmp_path / "missing").exists()
 
 
 def test_a_wander_that_is_not_positive_is_refused(old):

@@ -53,6 +53,7 @@ from ._infield_summary import (
     calibration_notes,
     calibrations,
     classical,
+    computed_track,
     informed_axes,
     innovation_check,
     leg_innovation_checks,
@@ -113,6 +114,11 @@ class InFieldUpdate:
         on each leg, and whether it told the heading (``informative``).
     notes : tuple of str
         What the run noticed (temperatures outside the calibrated range, ...).
+    track : dict
+        The computed (free-inertial) position at each filter step, north and east of the
+        first (m), and the taxi leg each step lay on (-1: the park, or off the legs).
+    old_calibration : dict
+        Channel -> the old :class:`~bayescal.ThermalCalibration` (the prior).
     posterior : object
         The draws behind it (the drift scale and every state at the alignment's end).
     coefficient_draws : dict
@@ -132,6 +138,8 @@ class InFieldUpdate:
     alignment: dict
     taxi: dict | None = None
     notes: tuple[str, ...] = ()
+    track: dict = field(default_factory=dict)
+    old_calibration: dict = field(default_factory=dict, compare=False, repr=False)
     posterior: object = field(default=None, compare=False, repr=False)
     coefficient_draws: dict = field(default_factory=dict, compare=False, repr=False)
 
@@ -158,11 +166,16 @@ class InFieldUpdate:
         return self
 
     def position_error(
-        self, temperature, *, speed: float = 0.0, duration_s: float = FLIGHT_S
+        self,
+        temperature,
+        *,
+        speed: float = 0.0,
+        duration_s: float = FLIGHT_S,
+        calibration: dict | None = None,
     ) -> dict:
-        """The horizontal position error the updated calibrations leave after free inertial
-        navigation (steps p-q of the claim: the gyros compensated at their temperature), as
-        the posterior predicts it.
+        """The horizontal position error the updated calibrations (or ``calibration``) leave
+        after free inertial navigation (steps p-q of the claim: the gyros compensated at their
+        temperature), as the posterior predicts it.
 
         The next mission aligns where this one parked (gyrocompassed and levelled), then
         navigates for ``duration_s``, parked or at ``speed`` turning 90 deg every 15 min
@@ -181,6 +194,10 @@ class InFieldUpdate:
             Ground speed, m/s (0: parked).
         duration_s : float
             How long it navigates, s.
+        calibration : dict, optional
+            Channel -> the :class:`~bayescal.ThermalCalibration` the next mission compensates
+            with (default: the updated ones); ``update.old_calibration`` gives the error that
+            keeping the old calibration leaves, as the posterior sees it.
 
         Returns
         -------
@@ -205,13 +222,12 @@ class InFieldUpdate:
             duration_s=duration_s,
             height=self.alignment["height_m"],
         )
+        used = self.calibration if calibration is None else calibration
         residuals = []
-        for axis, (name, calibration) in enumerate(self.calibration.items()):
-            powers = (temperature[axis] - calibration.reference) ** np.arange(
-                calibration.degree + 1
-            )
-            used = calibration.bias(temperature[axis])[0]
-            residuals.append(used - self.coefficient_draws[name] @ powers)
+        for axis, (name, updated) in enumerate(self.calibration.items()):
+            powers = (temperature[axis] - updated.reference) ** np.arange(updated.degree + 1)
+            bias = used[name].bias(temperature[axis])[0]
+            residuals.append(bias - self.coefficient_draws[name] @ powers)
         errors = si * np.stack(residuals, axis=1) @ mapping.T
         mean, covariance = central_gaussian(errors)
         return {
@@ -248,7 +264,7 @@ class InFieldUpdate:
         dict
             ``heading_error``, ``axes`` (per channel: ``informed_by_alignment`` and the
             updated coefficients), ``projections``, ``drift``, ``points``, ``classical``,
-            ``checks``, ``alignment`` and ``notes``.
+            ``checks``, ``alignment``, ``taxi``, ``track`` and ``notes``.
         """
         axes = {}
         for name, entry in self.axes.items():
@@ -274,6 +290,7 @@ class InFieldUpdate:
                 "checks": self.checks,
                 "alignment": self.alignment,
                 "taxi": self.taxi,
+                "track": self.track,
                 "notes": list(self.notes),
             }
         )
@@ -561,6 +578,8 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
         },
         taxi=taxi,
         notes=tuple(notes),
+        track=computed_track(alignment),
+        old_calibration=dict(old),
         posterior=posterior,
         coefficient_draws={
             name: calibration.coefficients

@@ -12,6 +12,7 @@ import numpy as np
 from .._output import to_jsonable
 from ..inference._thermal_posterior import central_gaussian
 from ..navigation._alignment import mixture_moments
+from ..navigation._earth import radii
 from ..navigation._tilt_rates import (
     blocks,
     heading_corrected,
@@ -286,6 +287,30 @@ def taxi_summary(alignment, context) -> dict | None:
         "steps_on_legs": counts,
         "informative": informative,
         "why": why,
+    }
+
+
+def computed_track(alignment) -> dict:
+    """The mechanization's position at each filter step as north and east of the first, m: the
+    changes of latitude and longitude times the ellipsoid's meridian and transverse radii there
+    (:func:`~bayescal.navigation._earth.radii`; flat over the few km of a taxi); and the taxi
+    leg each step lay on (an index into the track headings, -1 for the park's steps and those
+    off the legs). The free-inertial track, not corrected by the filter: it carries the heading
+    error the taxi tells."""
+    trajectory = alignment.trajectory
+    latitude = np.asarray(trajectory.latitude)
+    meridian, transverse = (float(r) for r in radii(latitude[0]))
+    height = float(trajectory.height)
+    legs = alignment.legs if alignment.legs is not None else np.full(latitude.size, -1)
+    return {
+        "time_s": alignment.times,
+        "north": (latitude - latitude[0]) * (meridian + height),
+        "east": (np.asarray(trajectory.longitude) - float(trajectory.longitude[0]))
+        * (transverse + height)
+        * math.cos(latitude[0]),
+        "unit": "m",
+        "leg": np.asarray(legs, dtype=int),
+        "park_steps": int(alignment.park_steps),
     }
 
 

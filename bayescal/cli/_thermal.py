@@ -171,6 +171,13 @@ def _add_infield(steps) -> None:
     infield.add_argument(
         "--save", metavar="PATH", help="the updated calibrations of the three gyros (one file)"
     )
+    infield.add_argument(
+        "--report",
+        metavar="PAGE.html",
+        help="the update's page (self-contained HTML): the park and taxi track, the points "
+        "before and after the heading correction, the old and updated calibrations, the 1 h "
+        "free-inertial error each leaves",
+    )
     infield.set_defaults(run=run_infield)
 
 
@@ -441,9 +448,12 @@ def _infield_columns(args) -> dict:
 
 
 def run_infield(args) -> int:
-    from .._output import write_json
+    from .._output import write_atomic, write_json
 
-    declare_outputs([args.file, args.calibration], {"--json": args.json, "--save": args.save})
+    declare_outputs(
+        [args.file, args.calibration],
+        {"--json": args.json, "--save": args.save, "--report": args.report},
+    )
     align = _span(args.align, "--align")
     drift = _parse_drift(args.drift)
     taxi = _span(args.taxi, "--taxi") if args.taxi else None
@@ -457,7 +467,7 @@ def run_infield(args) -> int:
     recording = load(args)
     # The analysis's modules load once the input is known to be good.
     from ..capabilities._infield import infield_update
-    from ..report._infield import infield_text
+    from ..report._infield import infield_page, infield_text
 
     result = infield_update(
         recording,
@@ -484,5 +494,9 @@ def run_infield(args) -> int:
     write_json(args.json, document)
     if args.save:
         result.save(args.save)
+    if args.report:
+        write_atomic(args.report, infield_page(result, source=recording.source))
     print(infield_text(document))
+    if args.report:
+        print(f"  report: {args.report}")
     return health_exit("thermal infield", result.checks["failures"])

@@ -22,6 +22,11 @@ Discovery figures, each the baseline model beside the final one: the Allan devia
 residual with each model's band, the binned spectrum of the increments with each model's,
 the residual's block means over time and against the temperature, and the samples'
 distribution at a rail.
+
+In-field update figures (``bayescal thermal infield --report``): the computed track of the park
+and the taxi with the steps used on each known leg, each gyro's tilt-rate points before and after
+the heading correction, the old and updated calibrations with their 90 % bands, and the 1 h
+free-inertial position error each calibration leaves as the posterior predicts it.
 """
 
 import base64
@@ -433,3 +438,194 @@ DISCOVERY_FIGURES = {
 }
 """Discovery's figures by name (the file name's suffix of ``discover --out``), each with what
 it shows; a discovery has the curves of the last two only with a temperature or a rail."""
+
+
+# ---------------------------------------------------------------------------------------------
+# The in-field update (``bayescal thermal infield --report``)
+
+NINETY = 1.6448536269514722
+"""The 95 % point of the standard normal: a Gaussian's central 90 % band is mean +- this sd."""
+CHI2_2_90 = -2 * np.log(0.1)
+"""The 90 % point of chi^2 with 2 dof: the 90 % ellipse of a 2-D Gaussian."""
+LEG_COLOURS = ("#3182bd", "#e6550d", "#31a354", "#756bb1", "#d6616b", "#8c6d31")
+
+
+def infield_track_figure(track: dict, taxi: dict | None):
+    """The computed (free-inertial) track, east against north, m (``track``: the
+    :attr:`~bayescal.InFieldUpdate.track`): the park's steps, the taxi's, the steps on each
+    known leg in that leg's colour, and each leg's known track heading drawn through its first
+    and last step used (a computed track off that line carries the heading error the taxi
+    tells)."""
+    north, east = np.asarray(track["north"]), np.asarray(track["east"])
+    leg, park = np.asarray(track["leg"]), int(track["park_steps"])
+    unit = pretty_unit(track["unit"])
+    figure, (axes,) = new_figure(7.2, 5.0)
+    axes.plot(east[:park], north[:park], ".", color="0.3", ms=3, label="the park (still)")
+    if taxi is not None:
+        axes.plot(east[park:], north[park:], "-", color="0.65", lw=1, label="the taxi, computed")
+        for index, heading in enumerate(taxi["track_heading_deg"]):
+            on = np.flatnonzero(leg == index)
+            colour = LEG_COLOURS[index % len(LEG_COLOURS)]
+            if on.size == 0:
+                continue
+            axes.plot(
+                east[on],
+                north[on],
+                ".",
+                color=colour,
+                ms=3,
+                label=f"steps used on the {heading:g}° leg ({on.size})",
+            )
+            # The known heading through the leg's first step used, as long as the steps run.
+            direction = np.array([np.cos(np.radians(heading)), np.sin(np.radians(heading))])
+            start = np.array([north[on[0]], east[on[0]]])
+            run = (np.stack([north[on], east[on]], axis=1) - start) @ direction
+            ends = start + np.outer([run.min(), run.max()], direction)
+            axes.plot(
+                ends[:, 1],
+                ends[:, 0],
+                "--",
+                color=colour,
+                lw=1.2,
+                label=f"known track {heading:g}°",
+            )
+    axes.set_aspect("equal", adjustable="datalim")
+    axes.set_xlabel(f"east of the start [{unit}]")
+    axes.set_ylabel(f"north of the start [{unit}]")
+    axes.set_title(
+        "the park and the taxi: computed track" if taxi else "the park: computed position",
+        fontsize=9,
+    )
+    axes.grid(True, lw=0.3, alpha=0.6)
+    axes.legend(fontsize=7.5, loc="best")
+    return figure
+
+
+def infield_points_figure(
+    classical: dict, scales: dict, unit: str, heading_deg, temperature_unit: str
+):
+    """Each gyro's classical points (the patent's tilt rates block by block, projected on it):
+    temperature against bias with its sd, before and after the heading error's Earth-rate
+    equivalent (``heading_deg``, None when no taxi told it) is taken off (steps m-n).
+    ``scales``: channel -> the factor from its unit to ``unit``."""
+    axes_of = classical["axes"]
+    figure, panels = new_figure(3.2 * len(axes_of) + 0.6, 3.6, len(axes_of))
+    shown = pretty_unit(unit)
+    for axes, (name, entry) in zip(panels, axes_of.items(), strict=True):
+        scale, rows = scales[name], entry["points"]
+        temperature = np.array([row["temperature"] for row in rows])
+        sd = scale * np.array([row["sd"] for row in rows])
+        before = scale * np.array([row["bias_before_heading"] for row in rows])
+        after = scale * np.array([row["bias"] for row in rows])
+        axes.errorbar(
+            temperature,
+            before,
+            yerr=sd,
+            fmt="o",
+            mfc="none",
+            color="0.45",
+            capsize=2,
+            ms=5,
+            label="before the heading correction",
+        )
+        if heading_deg is not None:
+            axes.errorbar(
+                temperature,
+                after,
+                yerr=sd,
+                fmt="o",
+                color="#3182bd",
+                capsize=2,
+                ms=4,
+                label="after",
+            )
+        axes.set_xlabel(f"temperature [{pretty_unit(temperature_unit)}]")
+        axes.set_ylabel(f"{name} bias [{shown}]")
+        axes.set_title(name, fontsize=9)
+        axes.grid(True, lw=0.3, alpha=0.6)
+    panels[0].legend(fontsize=7, loc="best")
+    title = (
+        f"the tilt-rate points, ±1 sd: before and after {heading_deg:.4g}° of heading error "
+        "is taken off"
+        if heading_deg is not None
+        else "the tilt-rate points, ±1 sd (no taxi told the heading: nothing taken off)"
+    )
+    figure.suptitle(title, fontsize=9)
+    return figure
+
+
+def infield_calibration_figure(old: dict, new: dict, points: dict, scales: dict, unit: str):
+    """Each gyro's old and updated calibration over the updated one's calibrated range, with
+    their Gaussian 90 % bands (:meth:`~bayescal.ThermalCalibration.bias`), and the smoother's
+    points the update saw (its bias per block, ±1 sd). ``scales``: channel -> the factor from
+    its unit to ``unit``."""
+    figure, panels = new_figure(3.2 * len(new) + 0.6, 3.6, len(new))
+    shown = pretty_unit(unit)
+    for axes, (name, updated) in zip(panels, new.items(), strict=True):
+        scale = scales[name]
+        low, high = updated.temperature_range
+        grid = np.linspace(low, high, 121)
+        for label, calibration, colour in (
+            ("old", old[name], "0.45"),
+            ("updated", updated, "#3182bd"),
+        ):
+            mean, sd = calibration.bias(grid)
+            axes.fill_between(
+                grid,
+                scale * (mean - NINETY * sd),
+                scale * (mean + NINETY * sd),
+                color=colour,
+                alpha=0.25,
+                lw=0,
+            )
+            axes.plot(grid, scale * mean, color=colour, lw=1.3, label=f"{label} (90 % band)")
+        seen = points[name]
+        axes.errorbar(
+            seen["temperature"],
+            scale * np.asarray(seen["bias"]),
+            yerr=scale * np.asarray(seen["sd"]),
+            fmt="o",
+            color="black",
+            ms=3.5,
+            capsize=2,
+            label="the alignment's points (±1 sd)",
+        )
+        axes.set_xlabel(f"temperature [{pretty_unit(updated.temperature_unit)}]")
+        axes.set_ylabel(f"{name} bias [{shown}]")
+        axes.set_title(name, fontsize=9)
+        axes.grid(True, lw=0.3, alpha=0.6)
+    panels[0].legend(fontsize=7, loc="best")
+    return figure
+
+
+def infield_drift_figure(errors: dict):
+    """The horizontal position error after free inertial navigation, as the posterior predicts
+    it (:meth:`~bayescal.InFieldUpdate.position_error`), one panel per flight (``errors``:
+    flight -> {"old": ..., "updated": ...}): each calibration's predicted mean error (north,
+    east) and its 90 % ellipse."""
+    figure, panels = new_figure(3.6 * len(errors) + 0.6, 3.9, len(errors))
+    angle = np.linspace(0, 2 * np.pi, 181)
+    circle = np.sqrt(CHI2_2_90) * np.stack([np.cos(angle), np.sin(angle)])
+    for axes, (flight, by_calibration) in zip(panels, errors.items(), strict=True):
+        for label, colour in (("old", "0.45"), ("updated", "#3182bd")):
+            error = by_calibration[label]
+            mean = np.asarray(error["mean"])
+            ellipse = mean[:, None] + np.linalg.cholesky(np.asarray(error["covariance"])) @ circle
+            axes.plot(ellipse[1], ellipse[0], color=colour, lw=1.2)
+            axes.plot(
+                mean[1],
+                mean[0],
+                "o",
+                color=colour,
+                label=f"{label}: mean {np.hypot(*mean):.3g} m from zero, sd {error['sd']:.3g} m",
+            )
+        axes.plot(0, 0, "+", color="black", ms=10)
+        hours = by_calibration["updated"]["duration_s"] / 3600
+        axes.set_title(f"{flight}, after {hours:g} h", fontsize=9)
+        axes.set_xlabel("east error [m]")
+        axes.set_ylabel("north error [m]")
+        axes.set_aspect("equal", adjustable="datalim")
+        axes.grid(True, lw=0.3, alpha=0.6)
+        axes.legend(fontsize=7, loc="best")
+    figure.suptitle("predicted position error: mean and 90 % ellipse", fontsize=9)
+    return figure

@@ -15,6 +15,7 @@ Given the noise parameters and R, the bias is then Gaussian (generalised least s
 a flat prior), which :func:`bias_given_noise` returns for any number of posterior draws.
 """
 
+import functools
 import itertools
 
 import equinox as eqx
@@ -74,8 +75,20 @@ def level_summary(values, rate_hz: float, components) -> LevelSummary:
     return LevelSummary(
         block_mean=_block_means(values, edges),
         block_time_s=(start + stop) / 2.0 / rate_hz,
-        basis=components.block_covariances(start, stop, rate_hz),
+        basis=_block_covariances(components, edges.tobytes(), float(rate_hz)),
     )
+
+
+@functools.lru_cache(maxsize=4)
+def _block_covariances(components, edges: bytes, rate_hz: float) -> np.ndarray:
+    """The components' block-mean covariances for blocks ``edges`` (int64 [start, stop)
+    pairs, as bytes), kept for the blocks met: they depend on the record only through its
+    length and gaps, and a term search's family (some sixty components, the Gauss-Markov
+    grid among them) took 20-40 ms to build at every fit of a notebook's record. Read-only."""
+    pairs = np.frombuffer(edges, dtype=np.int64).reshape(-1, 2)
+    basis = components.block_covariances(pairs[:, 0], pairs[:, 1], rate_hz)
+    basis.setflags(write=False)
+    return basis
 
 
 def bias_given_noise(summary: LevelSummary, variances, ramp=0.0):

@@ -307,11 +307,8 @@ class NoiseSetup:
     """A model -> its checks against the record."""
 
     def problem(self, terms: tuple[str, ...], prior_of: Callable) -> NoiseProblem:
-        """The noise problem of ``terms`` (named, not ``auto``) with the prior of them, its
-        summaries holding the components of those terms only (a term search's hold every
-        candidate's)."""
-        problem = NoiseProblem(self.spectral, self.level, prior_of(terms), lsb=np.asarray(self.lsb))
-        return problem.of_own_terms()
+        """The noise problem of ``terms`` (named, not ``auto``) with the prior of them."""
+        return NoiseProblem(self.spectral, self.level, prior_of(terms), lsb=np.asarray(self.lsb))
 
 
 def noise_setup(values, rate_hz: float, terms, unit: str, level_values=None, allan=None):

@@ -37,9 +37,7 @@ everything). A masked coordinate's posterior is its normal prior, whose normalis
 Hessian cancel exactly in the Laplace evidence, so the evidence of a masked model is that of
 the model without those coordinates. The models of a round of the forward search (the model
 so far and each candidate beside it) are independent solves, run side by side on the
-machine's cores (:meth:`_Families.fit_all`). The chosen model's posterior is then sampled on
-its own terms' components only (:meth:`~bayescal.models._noise_problem.NoiseProblem.
-of_own_terms`), not the family's.
+machine's cores (:meth:`_Families.fit_all`).
 """
 
 import contextvars

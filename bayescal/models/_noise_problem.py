@@ -203,7 +203,14 @@ class NoiseProblem(eqx.Module):
         (:meth:`~bayescal.models._components.Components.restricted`): the same log density
         and bias, every other component of the family weighing zero in them, at the cost of
         its few components, not of a term search's family of some sixty (the Gauss-Markov
-        term's grid of correlation times among them)."""
+        term's grid of correlation times among them).
+
+        What the posterior's bias draws take (:func:`~bayescal.inference._noise_posterior.
+        noise_posterior_of`: 2,000 block-mean covariances built from two components, not
+        sixty). Not the sampler: the same log density to rounding is a different chain, within
+        Monte Carlo error, and a borderline posterior's checks then pass or fail otherwise for
+        the same seed (a biquad's R-hat 1.017 against 1.01 in tests/test_high_frequency.py),
+        so the terms of a seed would change."""
         components, rows = self.components.restricted(self.terms)
         if len(rows) == len(self.components.shapes):
             return self

@@ -171,13 +171,15 @@ def noise_posterior_of(
     """The :class:`NoisePosterior` of ``problem`` from its MAP, its sampler's checks and the
     draws kept (walkers, draws, dimension; :func:`~._mcmc.diagnose`): each draw's values, its
     bias from the Gaussian conditional (keyed by ``rng``), densities and summaries."""
+    # The bias on the problem's own components: the family's others weigh zero in it.
+    own = problem.of_own_terms()
     natural, bias_conditional = _draw_values(
-        problem, jnp.asarray(kept), jax.random.PRNGKey(int(rng.integers(2**31)))
+        own, jnp.asarray(kept), jax.random.PRNGKey(int(rng.integers(2**31)))
     )
     pointwise, log_posterior = _draw_densities(problem.for_likelihood(), jnp.asarray(kept))
     pointwise = np.asarray(pointwise)[..., padded_index(problem.spectral)]
     natural = {name: np.asarray(value) for name, value in natural.items()}
-    map_values, map_sd = map_summary(problem, estimate)
+    map_values, map_sd = map_summary(own, estimate)
     summaries = {
         name: ParameterSummary(
             float(np.mean(natural[name])),

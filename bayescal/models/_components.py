@@ -76,6 +76,20 @@ class Components(eqx.Module):
     def names(self) -> tuple[str, ...]:
         return tuple(term.name for term in self.terms)
 
+    def restricted(self, names) -> tuple["Components", np.ndarray]:
+        """The components of the terms ``names`` among these, and the indices of their rows
+        in a summary of these: a model of those terms weighs every other component zero."""
+        wanted = set(names)
+        keep = [i for i, term in enumerate(self.terms) if term.name in wanted]
+        rows = [np.arange(len(self.shapes))[self.slice_of(self.terms[i].name)] for i in keep]
+        shapes = tuple(
+            shape for i in keep for shape in self.shapes[self.slice_of(self.terms[i].name)]
+        )
+        restricted = Components(
+            tuple(self.terms[i] for i in keep), shapes, tuple(self.counts[i] for i in keep)
+        )
+        return restricted, np.concatenate(rows) if rows else np.zeros(0, dtype=int)
+
     def slice_of(self, name: str) -> slice:
         """Where the components of term ``name`` lie."""
         index = self.names.index(name)

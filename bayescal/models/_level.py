@@ -15,9 +15,11 @@ Given the noise parameters and R, the bias is then Gaussian (generalised least s
 a flat prior), which :func:`bias_given_noise` returns for any number of posterior draws.
 """
 
+import functools
 import itertools
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.scipy.linalg import cho_solve
@@ -73,19 +75,52 @@ def level_summary(values, rate_hz: float, components) -> LevelSummary:
     return LevelSummary(
         block_mean=_block_means(values, edges),
         block_time_s=(start + stop) / 2.0 / rate_hz,
-        basis=components.block_covariances(start, stop, rate_hz),
+        basis=_block_covariances(components, edges.tobytes(), float(rate_hz)),
     )
+
+
+@functools.lru_cache(maxsize=4)
+def _block_covariances(components, edges: bytes, rate_hz: float) -> np.ndarray:
+    """The components' block-mean covariances for blocks ``edges`` (int64 [start, stop)
+    pairs, as bytes), kept for the blocks met: they depend on the record only through its
+    length and gaps, and a term search's family (some sixty components, the Gauss-Markov
+    grid among them) took 20-40 ms to build at every fit of a notebook's record. Read-only."""
+    pairs = np.frombuffer(edges, dtype=np.int64).reshape(-1, 2)
+    basis = components.block_covariances(pairs[:, 0], pairs[:, 1], rate_hz)
+    basis.setflags(write=False)
+    return basis
 
 
 def bias_given_noise(summary: LevelSummary, variances, ramp=0.0):
     """Mean and variance of the bias given the noise (the weights of the spectral components,
     :meth:`~bayescal.models._components.Components.weights`) and the ramp R, under a flat prior.
-    Works on a batch of draws (leading axes of ``variances``)."""
+    Works on a batch of draws (leading axes of ``variances``, and of ``ramp`` broadcast with
+    them)."""
     variances = jnp.asarray(variances)
-    covariance = jnp.einsum("...t,tij->...ij", variances, summary.basis)
-    target = summary.block_mean - jnp.asarray(ramp)[..., None] * summary.block_time_s
+    batch = jnp.broadcast_shapes(variances.shape[:-1], jnp.shape(ramp))
+    count = variances.shape[-1]
+    flat = (
+        jnp.broadcast_to(variances, (*batch, count)).reshape(-1, count),
+        jnp.broadcast_to(jnp.asarray(ramp, dtype=variances.dtype), batch).reshape(-1),
+    )
+    # BIAS_BATCH draws at a time: the covariances of a whole posterior's draws at once
+    # (2,000 of 119 x 119) are 230 MB, and building and factorising them took ten times as
+    # long as a batch small enough to stay in the processor's cache.
+    mean, variance = jax.lax.map(
+        lambda draw: _bias_of_draw(summary, *draw), flat, batch_size=BIAS_BATCH
+    )
+    return mean.reshape(batch), variance.reshape(batch)
+
+
+BIAS_BATCH = 32
+"""Draws whose block-mean covariances :func:`bias_given_noise` builds and factorises at once."""
+
+
+def _bias_of_draw(summary: LevelSummary, variances, ramp):
+    """:func:`bias_given_noise` of one draw: generalised least squares of the block means."""
+    covariance = jnp.einsum("t,tij->ij", variances, summary.basis)
+    target = summary.block_mean - ramp * summary.block_time_s
     factor = jnp.linalg.cholesky(covariance)
-    ones = jnp.broadcast_to(jnp.ones(summary.block_mean.shape), target.shape)
-    weights = cho_solve((factor, True), ones[..., None])[..., 0]
-    precision = jnp.sum(weights, axis=-1)
-    return jnp.sum(weights * target, axis=-1) / precision, 1.0 / precision
+    weights = cho_solve((factor, True), jnp.ones(summary.block_mean.shape))
+    precision = jnp.sum(weights)
+    return jnp.sum(weights * target) / precision, 1.0 / precision

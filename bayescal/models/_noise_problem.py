@@ -11,6 +11,8 @@ components of a family of terms (every candidate of a term search), a term the p
 weighing zero.
 """
 
+import dataclasses
+
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
@@ -195,6 +197,36 @@ class NoiseProblem(eqx.Module):
         return NoiseProblem(
             padded_summary(self.spectral), None, self.prior, lsb=self.lsb, mask=self.mask
         )
+
+    def of_own_terms(self) -> "NoiseProblem":
+        """This problem with its summaries holding only the components of its own terms
+        (:meth:`~bayescal.models._components.Components.restricted`): the same log density
+        and bias, every other component of the family weighing zero in them, at the cost of
+        its few components, not of a term search's family of some sixty (the Gauss-Markov
+        term's grid of correlation times among them).
+
+        What the posterior's bias draws take (:func:`~bayescal.inference._noise_posterior.
+        noise_posterior_of`: 2,000 block-mean covariances built from two components, not
+        sixty). Not the sampler: the same log density to rounding is a different chain, within
+        Monte Carlo error, and a borderline posterior's checks then pass or fail otherwise for
+        the same seed (a biquad's R-hat 1.017 against 1.01 in tests/test_high_frequency.py),
+        so the terms of a seed would change."""
+        components, rows = self.components.restricted(self.terms)
+        if len(rows) == len(self.components.shapes):
+            return self
+        spectral = self.spectral
+        # Rows after the components' own are extra components (none in a noise problem's).
+        rows = np.concatenate((rows, np.arange(len(self.components.shapes), len(spectral.basis))))
+        spectral = dataclasses.replace(
+            spectral,
+            basis=np.asarray(spectral.basis)[rows],
+            mean_basis=np.asarray(spectral.mean_basis)[rows],
+            components=components,
+        )
+        level = self.level
+        if level is not None:
+            level = dataclasses.replace(level, basis=np.asarray(level.basis)[rows])
+        return dataclasses.replace(self, spectral=spectral, level=level)
 
     def log_posterior(self, theta):
         value = self.log_prior(theta) + jnp.sum(self.pointwise_log_likelihood(theta))

@@ -35,17 +35,12 @@ Cost: every model of a family shares one compiled optimiser. A family is a
 a model is a mask switching some off (a masked noise scale is zero, a masked filter passes
 everything). A masked coordinate's posterior is its normal prior, whose normalised density and
 Hessian cancel exactly in the Laplace evidence, so the evidence of a masked model is that of
-the model without those coordinates. The models of a round of the forward search (the model
-so far and each candidate beside it) are independent solves, run side by side on the
-machine's cores (:meth:`_Families.fit_all`).
+the model without those coordinates.
 """
 
-import contextvars
 import dataclasses
 import math
-import os
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import equinox as eqx
@@ -169,25 +164,6 @@ class _Families:
             )
         return self.problems[key]
 
-    def fit_all(self, models) -> None:
-        """Fit each of ``models`` not fitted yet, side by side: XLA runs a compiled solve
-        without Python's lock, so a round of the search (a model and each candidate beside
-        it, independent solves) costs on two cores about half their sum, not all of it. Each
-        solve is the one :meth:`log_evidence` runs alone, with the same result."""
-        pending = [m for m in dict.fromkeys(models) if m not in self.evidence]
-        for terms in pending:  # the shared problems made here, not raced for by the threads
-            self._problem(terms)
-        workers = min(len(pending), os.cpu_count() or 1)
-        if workers < 2:
-            return
-        # Each task in a copy of this context: a stage's timing and the announcement of a
-        # first trace (context variables) reach the threads.
-        with ThreadPoolExecutor(workers) as pool:
-            for future in [
-                pool.submit(contextvars.copy_context().run, self.log_evidence, m) for m in pending
-            ]:
-                future.result()
-
     def log_evidence(self, terms: frozenset) -> float:
         if terms not in self.evidence:
             problem = self._problem(terms)
@@ -294,7 +270,6 @@ def select_noise_terms(
     model = frozenset({"white", *base}) - set(candidates)
     while True:
         options = [t for t in candidates if t not in model and _fits_in(model, t)]
-        families.fit_all([model, *(_with(model, t) for t in options)])
         tried = {t: gain(model, t) for t in options}
         best = _simplest_decisive(tried, threshold)
         if best is None:

@@ -4,7 +4,7 @@ cover, how far the taxi narrows the east bias level, the ablations, and what the
 in free inertial navigation.
 
     nice -n 10 python benchmarks/infield_taxi.py [--scenarios 100] [--rate 100] [--seed 0]
-        [--aging 4] [--tactical] [--park-s 1200] [--warmup 20:38.6]
+        [--aging 4] [--tactical] [--park-s 1200] [--warmup 20:38.6] [--gnss SD]
 
 Each scenario: benchmarks/infield_alignment.py's park (navigation grade, 20 minutes, latitude
 45 deg, heading 30 deg, warming 20 -> 38.6 degC), aged by ``--aging`` times the calibration's
@@ -34,7 +34,10 @@ often the posterior's predicted 90 % region (chi^2, 2 dof) holds the realised er
 ``--park-s`` and ``--warmup`` change the park's length and its temperatures (start:end, degC):
 what the data must span for the updated calibration to hold over the calibrated range.
 ``--tactical``: gyros of ARW 0.05 deg/sqrt(h) and bias instability 0.05 deg/h, calibrated
-with 10 times the navigation grade's sds.
+with 10 times the navigation grade's sds. ``--gnss SD``: the taxi also logs GNSS fixes of SD m
+(white, once a second; drawn after the rest, so the IMU's record is the same), and a fifth
+update, "positions, no track", takes the heading from them alone (``positions=`` the
+latitude and longitude columns, ``position_sd=SD``, no track heading).
 """
 
 import argparse
@@ -169,12 +172,18 @@ def payoff(park, result, old) -> dict:
 
 
 def one_scenario(
-    seed: int, old, rate: float, aging: float, gyro_noise=None, park: dict | None = None
+    seed: int,
+    old,
+    rate: float,
+    aging: float,
+    gyro_noise=None,
+    park: dict | None = None,
+    gnss: float | None = None,
 ) -> dict:
     import bayescal as bc
     from bayescal.navigation import _alignment
 
-    taxi = bc.Taxi(legs=LEGS, speed=10.0)
+    taxi = bc.Taxi(legs=LEGS, speed=10.0, gnss_sd=gnss)
     parks = {
         aged: bc.simulate_park(
             old,
@@ -196,6 +205,9 @@ def one_scenario(
         "no taxi": (aging, {}, round(park_s * rate)),
         "heading forced to zero": (aging, {}, round(park_s * rate)),
     }
+    if gnss is not None:
+        fixes = {"positions": "gnss_latitude,gnss_longitude", "position_sd": gnss}
+        runs["positions, no track"] = (aging, {"taxi": (park_s, end), **fixes}, -1)
     rows = {}
     for name, (aged, extra, last) in runs.items():
         saved = _alignment.HEADING_PRIOR
@@ -305,6 +317,7 @@ def main() -> None:
     parser.add_argument("--tactical", action="store_true", help="ARW 0.05 deg/sqrt(h) gyros")
     parser.add_argument("--park-s", type=float, default=1200.0, help="the park's length, s")
     parser.add_argument("--warmup", default="20:38.6", help="START:END degC over the park")
+    parser.add_argument("--gnss", type=float, help="GNSS fixes of this sd (m) in the taxi")
     args = parser.parse_args()
     start, end = (float(x) for x in args.warmup.split(":"))
     park = {"duration_s": args.park_s, "warmup": (start, end)}
@@ -316,7 +329,7 @@ def main() -> None:
         old, noise = tactical(old), TACTICAL_GYRO
     results: dict[str, list] = {}
     for index in range(args.scenarios):
-        rows = one_scenario(args.seed + index, old, args.rate, args.aging, noise, park)
+        rows = one_scenario(args.seed + index, old, args.rate, args.aging, noise, park, args.gnss)
         for name, row in rows.items():
             results.setdefault(name, []).append(row)
         if (index + 1) % args.every == 0 or index + 1 == args.scenarios:

@@ -300,19 +300,23 @@ def test_the_library_refuses_what_the_command_line_refuses(old):
 
 
 TAXI_RATE = 10.0
+GNSS_SD = 2.0
+"""sd of the simulated GNSS fixes' north and east error, m."""
 
 
 @pytest.fixture(scope="module")
 def taxi_run(tmp_path_factory, old):
-    """A 10-minute park then a taxi of two legs at 10 m/s (30 deg, then 120 deg), 10 Hz: the
-    simulation, the taxi's end (s) and a folder holding it as ``taxi.csv`` with the old
-    calibration as ``old.json``."""
+    """A 10-minute park then a taxi of two legs at 10 m/s (30 deg, then 120 deg), 10 Hz, with
+    GNSS fixes of 2 m sd once a second (columns ``gnss_latitude``, ``gnss_longitude``, deg;
+    drawn after the rest, so the IMU's columns are those without them): the simulation, the
+    taxi's end (s) and a folder holding it as ``taxi.csv`` with the old calibration as
+    ``old.json``."""
     park = bc.simulate_park(
         old,
         seed=5,
         duration_s=600.0,
         rate_hz=TAXI_RATE,
-        taxi=bc.Taxi(legs=((30.0, 200.0), (120.0, 150.0))),
+        taxi=bc.Taxi(legs=((30.0, 200.0), (120.0, 150.0)), gnss_sd=GNSS_SD),
     )
     end = park.recording.columns["time"][-1] + 1 / TAXI_RATE
     folder = tmp_path_factory.mktemp("taxi")
@@ -375,6 +379,89 @@ def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_lev
     assert len(flights) == 4
     for flight in flights:
         assert found[flight]["mahalanobis2"] < 13.8, (flight, found[flight])
+
+
+def test_position_fixes_tell_the_heading_without_a_known_track(old, taxi_run):
+    """The taxi of the test above with no track heading but its GNSS fixes (2 m sd, white, once
+    a second, ``positions=`` the latitude and longitude columns): the computed track drifts from
+    the fixes by the heading error times the distance run, so the heading error's 90 % interval
+    covers the truth, the east level holds the truth within 3.3 posterior sd and its sd falls
+    below half its prior, and the result says the position fixes told the heading (measured:
+    heading -0.116 +- 0.017 deg against -0.125 deg true; east level sd 0.0058 deg/h, prior
+    0.020)."""
+    taxi = load_benchmark("infield_taxi")
+    park, end, _ = taxi_run
+    result = bc.infield_update(
+        park.recording,
+        old,
+        latitude=45.0,
+        align=(0, 600),
+        taxi=(600, end),
+        positions="gnss_latitude,gnss_longitude",
+        position_sd=GNSS_SD,
+        seed=5,
+    ).check()
+    assert result.taxi["informative"] and result.taxi["reference"] == "position fixes"
+    assert result.taxi["steps_on_legs"] == [] and result.taxi["positions"]["fixes_in_taxi"] > 300
+    computed = result.alignment["final_attitude_deg"]["heading"]
+    true_heading = (computed - park.truth["trajectory"]["heading"][-1] + 180) % 360 - 180
+    heading = result.heading_error
+    assert heading["q05"] < true_heading < heading["q95"], (heading, true_heading)
+    east = result.projections["east"]["level"]
+    assert east["informed"]
+    assert abs(east["mean"] - taxi.park_truth(park, TAXI_RATE)["east"]) < 3.3 * east["sd"]
+    assert east["sd"] < 0.5 * east["prior_sd"]
+
+
+def test_a_position_reference_that_cannot_be_used_is_refused(run_cli, old, taxi_run, tmp_path):
+    """Positions without a taxi, a column that is not there, or fixes that only start in the
+    taxi: the library raises naming ``positions``; the command line exits 2 naming
+    ``--positions`` and writes nothing."""
+    park, end, folder = taxi_run
+    options = {"latitude": 45.0, "align": (0, 600)}
+    with pytest.raises(bc.InputError, match="positions was given without a taxi"):
+        bc.infield_update(park.recording, old, positions="gnss_latitude,gnss_longitude", **options)
+    with pytest.raises(bc.InputError, match="positions"):
+        bc.infield_update(park.recording, old, taxi=(600, end), positions="x", **options)
+    with pytest.raises(bc.InputError, match="sd"):
+        bc.infield_update(
+            park.recording,
+            old,
+            taxi=(600, end),
+            positions="gnss_latitude,gnss_longitude",
+            position_sd=0.0,
+            **options,
+        )
+    columns = dict(park.recording.columns)
+    for name in ("gnss_latitude", "gnss_longitude"):
+        columns[name] = np.where(columns["time"] <= 600, np.nan, columns[name])
+    late = bc.Recording("late fixes", columns, park.recording.header_units)
+    with pytest.raises(bc.InputError, match="no fix in the park"):
+        bc.infield_update(
+            late, old, taxi=(600, end), positions="gnss_latitude,gnss_longitude", **options
+        )
+    code, _, err = run_cli(
+        "thermal",
+        "infield",
+        folder / "taxi.csv",
+        "--calibration",
+        folder / "old.json",
+        "--latitude",
+        "45",
+        "--align",
+        "0:600",
+        "--taxi",
+        f"600:{end:g}",
+        "--positions",
+        "gnss_lat,gnss_longitude",
+        "--unit",
+        "deg/s",
+        "--json",
+        tmp_path / "out.json",
+    )
+    assert code == 2, err
+    assert "--positions gnss_lat,gnss_longitude" in err and "gnss_lat'" in err, err
+    assert "Traceback" not in err and not (tmp_path / "out.json").exists()
 
 
 def test_a_taxi_whose_wander_exceeds_its_model_fails_the_legs_check(

@@ -29,6 +29,7 @@ from ..inference._sampler import Sampler, sampler_of
 from ..inference._thermal_posterior import central_gaussian
 from ..navigation._alignment import (
     DRIFT_PRIOR_SCALE,
+    POSITION_SD,
     find_motion,
     fine_alignment,
 )
@@ -46,7 +47,9 @@ from ._infield_inputs import (
     check_wander,
     gyro_priors,
     old_calibrations,
+    position_names,
     read_alignment,
+    read_positions,
     taxi_reference,
 )
 from ._infield_summary import (
@@ -111,7 +114,9 @@ class InFieldUpdate:
         (deg), and the white-noise densities read from the record.
     taxi : dict
         The taxi, when one was given: its window, the track headings, how many filter steps lay
-        on each leg, and whether it told the heading (``informative``).
+        on each leg, the position reference (``positions``: its columns, sd in m and fixes in
+        the taxi), whether it told the heading (``informative``) and which reference told it
+        (``reference``: ``track heading``, ``position fixes`` or both).
     notes : tuple of str
         What the run noticed (temperatures outside the calibrated range, ...).
     track : dict
@@ -304,6 +309,8 @@ def infield_update(
     align: tuple[float, float],
     taxi: tuple[float, float] | None = None,
     track_heading=None,
+    positions=None,
+    position_sd: float = POSITION_SD,
     wander: tuple[float, float] = (WANDER_SD, WANDER_TIME_S),
     seed: int = 0,
     drift: float | str = "auto",
@@ -340,8 +347,19 @@ def infield_update(
         so separates it from the east bias level (steps k-l of the claim).
     track_heading : float or sequence of float or str, optional
         The taxiway's known track heading, deg from north: one, or one per straight leg
-        (``"120,210"`` as a string too). Without it the taxi tells nothing about the heading
-        (a note says so) and the east level stays at its prior.
+        (``"120,210"`` as a string too). Without it or ``positions`` the taxi tells nothing
+        about the heading (a note says so) and the east level stays at its prior.
+    positions : (str, str) or str, optional
+        A position reference (GNSS): the recording's north and east position columns
+        (``"gnss_latitude,gnss_longitude"`` as a string too), latitude and longitude in an
+        angle unit (deg, rad) or north and east in m, as the header declares; NaN or empty
+        where there is no fix. The value at each filter step's sample (once a second) is taken
+        as the position then, and the first such fix lies in the park. The computed position
+        less each fix measures the position error; the heading error turns the computed
+        track away from the fixes by psi times the distance run, so the taxi tells the heading
+        without a known track (both may be given).
+    position_sd : float
+        sd of a fix's north and east error, m (white).
     wander : (float, float)
         The vehicle's wander about the taxiway's centre line: its sd (m) and time constant
         (s) (a second-order Gauss-Markov process, :mod:`bayescal.navigation._taxi`). It sets
@@ -381,8 +399,9 @@ def infield_update(
     InputError
         Motion in the alignment window (where), a missing temperature, a latitude out of
         range, a window too short, a calibration of other channels or units, a taxi window
-        before the park's end or past the record, a track heading without a taxi, a wander
-        whose sd or time constant is not positive.
+        before the park's end or past the record, a track heading or positions without a taxi,
+        position columns that are missing, of no declared unit, or with no fix in the park, a
+        wander whose sd or time constant is not positive.
 
     Examples
     --------
@@ -400,6 +419,7 @@ def infield_update(
     latitude = check_latitude(latitude)
     window = alignment_window(align)
     taxi_window, headings = taxi_reference(taxi, track_heading, window)
+    position_columns, position_sd = position_names(positions, position_sd, taxi_window)
     wander_sd, wander_time_s = check_wander(wander)
     if drift != "auto" and not (isinstance(drift, (int, float)) and 0 <= drift < math.inf):
         raise InputError(
@@ -413,6 +433,9 @@ def infield_update(
     read = window if taxi_window is None else (window[0], taxi_window[1])
     gyro, accel, heat, first, heat_unit, notes = read_alignment(recording, read, columns, options)
     old = old_calibrations(calibration, gyro_columns, first.unit, heat_unit)
+    fixes = None
+    if position_columns is not None:
+        fixes = read_positions(recording, position_columns, first, options, height)
     si = parse_unit(first.unit).to_si
     park = min(gyro.shape[0], round((window[1] - window[0]) * first.rate_hz))
     moved = find_motion(gyro[:park] * si, accel[:park], first.rate_hz)
@@ -449,6 +472,8 @@ def infield_update(
         accel_instability=accel_instability,
         park_samples=park,
         taxi=reference,
+        positions=fixes,
+        position_sd=position_sd,
     )
     posterior = sample_alignment(
         alignment,
@@ -469,6 +494,8 @@ def infield_update(
         "drift": drift,
         "taxi": taxi_window,
         "headings": headings,
+        "positions": position_columns,
+        "position_sd": position_sd,
         "park_samples": park,
     }
     return _result(alignment, posterior, old, heat, priors, context)
@@ -504,6 +531,12 @@ def _result(alignment, posterior, old: dict, heat, priors, context: dict) -> InF
             f"the velocity innovations (sum of NIS {innovations['sum_nis']:.4g}) exceed the "
             f"99.9 % chi^2 limit {innovations['upper_limit']:.4g}: the vehicle swayed or moved, "
             "or the noise is larger than the model holds"
+            + (
+                " (the position fixes' residuals included: their errors may be larger than "
+                "position_sd or not white)"
+                if context["positions"] is not None
+                else ""
+            )
         )
     legs = leg_innovation_checks(posterior.filtered, alignment.legs, context["headings"])
     failures += [

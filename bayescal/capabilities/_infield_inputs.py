@@ -14,8 +14,9 @@ from ..models._terms import bounding_walk_variance
 from ..models._thermal import _drift_shape
 from ..models.effects._parameter import Context
 from ..navigation._alignment import MIN_ALIGNMENT_S, GyroPrior
+from ..navigation._earth import north_east
 from ..recording._columns import find_temperature_column, temperature_unit
-from ..recording._recording import Recording
+from ..recording._recording import Channel, Recording, seconds_from_start
 from ..recording._units import parse_unit
 from ._thermal import ThermalCalibration, load_thermal_calibration
 
@@ -76,6 +77,84 @@ def taxi_reference(taxi, track_heading, window) -> tuple[tuple[float, float] | N
             fix="give the taxiway's heading in degrees from north, one per straight leg",
         )
     return (start, stop), headings
+
+
+def position_names(positions, position_sd, taxi) -> tuple[tuple[str, str] | None, float]:
+    """The position reference's two columns (north then east; None without one) and the sd of
+    a fix (m), checked."""
+    if not (isinstance(position_sd, (int, float)) and 0 < position_sd < math.inf):
+        raise InputError(f"position_sd={position_sd!r}", fix="give the fixes' sd in m, e.g. 2")
+    if positions is None:
+        return None, float(position_sd)
+    names = positions.split(",") if isinstance(positions, str) else list(np.atleast_1d(positions))
+    names = [str(name).strip() for name in names]
+    if len(names) != 2 or not all(names):
+        raise InputError(
+            f"positions={positions!r}",
+            fix="name two columns: the north then the east position (latitude and longitude in "
+            "deg or rad, or north and east in m)",
+        )
+    if taxi is None:
+        raise InputError(
+            "positions was given without a taxi",
+            fix="give the taxi's window (t0, t1) too: the fixes tell the heading while it moves",
+        )
+    return (names[0], names[1]), float(position_sd)
+
+
+def read_positions(recording: Recording, names, first: Channel, options: dict, height: float):
+    """The position fixes on the alignment's sample grid (that of ``first``), north and east
+    of the first fix, m, NaN where none: the columns' value at the row of each sample (NaN or
+    empty where the receiver gave no fix). Latitude and longitude (an angle unit in the
+    header) become north and east by the ellipsoid's radii
+    (:func:`~bayescal.navigation._earth.north_east`); columns in m are north and east already.
+    """
+    values, units = [], []
+    for name in names:
+        try:
+            values.append(np.asarray(recording.require(name, "position column"), dtype=float))
+        except InputError as error:
+            raise InputError(
+                f"positions={','.join(names)}: {error.problem}",
+                source=recording.source,
+                fix=error.fix,
+            ) from None
+        units.append(recording.header_units.get(name))
+    if units[0] != units[1] or units[0] is None:
+        raise InputError(
+            f"positions={','.join(names)}: the columns' units are {units[0]} and {units[1]}",
+            source=recording.source,
+            fix="declare one unit for both in the header: deg or rad (latitude, longitude) or m "
+            "(north, east), e.g. gnss_latitude[deg]",
+        )
+    relative, _, _ = seconds_from_start(
+        recording,
+        options["time_column"],
+        options["time_unit"],
+        options["rate_hz"],
+        n_rows=recording.n_rows,
+    )
+    times = first.time_s
+    rows = np.clip(np.searchsorted(relative, times - 0.5 / first.rate_hz), 0, relative.size - 1)
+    on_grid = np.abs(relative[rows] - times) < 0.5 / first.rate_hz
+    fixes = np.stack([v[rows] for v in values], axis=1)
+    fixes[~on_grid] = np.nan
+    fixes[~np.isfinite(fixes).all(axis=1)] = np.nan
+    if units[0] == "m":
+        return fixes
+    unit = parse_unit(units[0])
+    if unit.quantity != "angle":
+        raise InputError(
+            f"positions={','.join(names)}: unit {units[0]} is neither an angle nor m",
+            source=recording.source,
+            fix="give latitude and longitude in deg or rad, or north and east in m",
+        )
+    angles = fixes * unit.to_si
+    present = np.flatnonzero(np.isfinite(angles[:, 0]))
+    if not present.size:
+        return fixes
+    origin = angles[present[0]]
+    return north_east(angles[:, 0], angles[:, 1], height, origin=(origin[0], origin[1]))
 
 
 def check_wander(wander) -> tuple[float, float]:

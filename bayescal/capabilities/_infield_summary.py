@@ -12,7 +12,7 @@ import numpy as np
 from .._output import to_jsonable
 from ..inference._thermal_posterior import central_gaussian
 from ..navigation._alignment import mixture_moments
-from ..navigation._earth import radii
+from ..navigation._earth import north_east
 from ..navigation._tilt_rates import (
     blocks,
     heading_corrected,
@@ -258,34 +258,65 @@ def informed_axes(attitude, names, taxi: bool = False) -> dict:
 
 
 def taxi_summary(alignment, context) -> dict | None:
-    """The taxi as the filter used it: its window, the track headings, the steps on each leg,
-    and whether it told the heading (and why not)."""
+    """The taxi as the filter used it: its window, the track headings and the steps on each
+    leg, the position reference and its fixes in the taxi, whether it told the heading, which
+    reference told it (``reference``), and why (not)."""
     if context["taxi"] is None:
         return None
     headings = context["headings"]
     legs = alignment.legs
     counts = [int(np.sum(legs == i)) for i in range(len(headings))] if legs is not None else []
-    informative = sum(counts) > 0
-    if not headings:
+    fixes = 0
+    if alignment.fixes is not None:
+        moving = np.arange(alignment.fixes.shape[0]) >= alignment.park_steps
+        fixes = int(np.sum(np.isfinite(alignment.fixes[:, 0]) & moving))
+    told = [
+        name
+        for name, used in (("track heading", sum(counts) > 0), ("position fixes", fixes > 0))
+        if used
+    ]
+    if not headings and context["positions"] is None:
         why = (
-            "the taxi gave no heading information: no track heading was given (a taxi without a "
-            "known track or a position reference cannot tell the heading error from the east "
-            "bias level); the east level stays at its prior"
+            "the taxi gave no heading information: no track heading or position reference was "
+            "given (a taxi without a known track or a position reference cannot tell the "
+            "heading error from the east bias level); the east level stays at its prior"
         )
-    elif not informative:
+    elif not told:
+        reasons = [
+            "no filter step lay on a leg of the given track headings (computed track within 1 "
+            "deg of one for 5 s either side, at 3.1 m/s or more)"
+        ] * bool(headings)
+        reasons += ["no position fix lay in the taxi"] * (context["positions"] is not None)
         why = (
-            "the taxi gave no heading information: no filter step lay on a leg of the given "
-            "track headings (computed track within 1 deg of one for 5 s either side, at 3.1 m/s "
-            "or more); the east level stays at its prior"
+            f"the taxi gave no heading information: {' and '.join(reasons)}; the east level "
+            "stays at its prior"
         )
     else:
-        why = "the cross-track velocity on the legs told the heading error"
+        why = (
+            " and ".join(
+                {
+                    "track heading": "the cross-track velocity on the legs",
+                    "position fixes": "the computed track's drift from the position fixes",
+                }[name]
+                for name in told
+            )
+            + " told the heading error"
+        )
+    positions = None
+    if context["positions"] is not None:
+        positions = {
+            "columns": list(context["positions"]),
+            "sd_m": context["position_sd"],
+            "fixes_in_taxi": fixes,
+        }
     return {
         "start_s": context["taxi"][0],
         "stop_s": context["taxi"][1],
         "track_heading_deg": list(headings),
         "steps_on_legs": counts,
-        "informative": informative,
+        "positions": positions,
+        "informative": bool(told),
+        "reference": " and ".join(told) or None,
         "why": why,
     }
 
@@ -293,21 +324,17 @@ def taxi_summary(alignment, context) -> dict | None:
 def computed_track(alignment) -> dict:
     """The mechanization's position at each filter step as north and east of the first, m: the
     changes of latitude and longitude times the ellipsoid's meridian and transverse radii there
-    (:func:`~bayescal.navigation._earth.radii`; flat over the few km of a taxi); and the taxi
+    (:func:`~bayescal.navigation._earth.north_east`; flat over the few km of a taxi); and the taxi
     leg each step lay on (an index into the track headings, -1 for the park's steps and those
     off the legs). The free-inertial track, not corrected by the filter: it carries the heading
     error the taxi tells."""
     trajectory = alignment.trajectory
-    latitude = np.asarray(trajectory.latitude)
-    meridian, transverse = (float(r) for r in radii(latitude[0]))
-    height = float(trajectory.height)
-    legs = alignment.legs if alignment.legs is not None else np.full(latitude.size, -1)
+    track = north_east(trajectory.latitude, trajectory.longitude, float(trajectory.height))
+    legs = alignment.legs if alignment.legs is not None else np.full(track.shape[0], -1)
     return {
         "time_s": alignment.times,
-        "north": (latitude - latitude[0]) * (meridian + height),
-        "east": (np.asarray(trajectory.longitude) - float(trajectory.longitude[0]))
-        * (transverse + height)
-        * math.cos(latitude[0]),
+        "north": track[:, 0],
+        "east": track[:, 1],
         "unit": "m",
         "leg": np.asarray(legs, dtype=int),
         "park_steps": int(alignment.park_steps),

@@ -141,6 +141,19 @@ def _add_infield(steps) -> None:
         help="the taxiway's known track heading, deg from north, one per straight leg",
     )
     infield.add_argument(
+        "--positions",
+        metavar="NORTH_COL,EAST_COL",
+        help="a position reference (GNSS) in the taxi: the north and east position columns "
+        "(latitude and longitude in deg or rad, or north and east in m, as the header says; "
+        "empty where no fix); with --taxi it tells the heading error without a known track",
+    )
+    infield.add_argument(
+        "--position-sd",
+        type=finite_float,
+        metavar="M",
+        help="sd of a position fix's north and east error, m (default 2: a single GNSS receiver's)",
+    )
+    infield.add_argument(
         "--wander",
         metavar="SD:TAU",
         default="0.5:20",
@@ -476,6 +489,8 @@ def run_infield(args) -> int:
         align=align,
         taxi=taxi,
         track_heading=args.track_heading,
+        positions=args.positions,
+        **({} if args.position_sd is None else {"position_sd": args.position_sd}),
         wander=_pair(args.wander, "--wander"),
         seed=args.seed,
         drift=drift or 0.0,

@@ -66,6 +66,7 @@ from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
 from ..classical._gravity import normal_gravity
 from ..models._terms import bounding_walk_variance
+from ._earth import north_east
 from ._error_model import (
     NAVIGATION_STATES,
     POSITION,
@@ -120,7 +121,10 @@ LEG_SIGMAS = 3.0
 beyond LEG_TOLERANCE_DEG while no leg has been found (:func:`fine_alignment`)."""
 RELINEARIZATIONS = 4
 """At most this many smoother runs find the taxi's legs and linearize the next model, the first
-without the taxi's measurements (:func:`fine_alignment`)."""
+without the taxi's cross-track measurements (:func:`fine_alignment`)."""
+POSITION_SD = 2.0
+"""sd of a position fix's north and east error, m (a single GNSS receiver's: 1-3 m); the fixes
+are taken as white."""
 DRIFT_PRIOR_SCALE = 10.0
 """The scale of the half-Cauchy prior of the aging scale s, in the calibrations' sd of c_0."""
 DRIFT_PRIOR_CUT = 1000.0
@@ -313,16 +317,24 @@ class FineAlignment:
     legs: np.ndarray | None = None
     """(K,) the taxi leg each step lies on (an index into the track headings), -1 off the
     legs; None without a taxi."""
+    fixes: np.ndarray | None = None
+    """(K, 2) the position fix at each step, north and east of the first fix, m (NaN where
+    none, and at the first: :func:`_fixes`); None without a position reference."""
 
 
-def _measurements(layout: Layout, velocity, attitude, correction, park_steps: int, legs, taxi):
+def _measurements(
+    layout: Layout, velocity, attitude, correction, park_steps: int, legs, taxi, track, fixes
+):
     """The measurement rows and values at every step: the computed north and east velocity and
     the computed heading's change since the first step (from C_b^n ``attitude``) at the park's
     steps (the vehicle is still), the computed cross-track velocity at the taxi's
     steps on a leg (:func:`~._taxi.cross_track_row`, linearized at the velocity less
-    ``correction``); NaN where nothing is measured."""
+    ``correction``), and where ``fixes`` (K, 2; None: no position reference) hold a position
+    fix, the computed position ``track`` (K, 2, north and east of the first step, m) less the
+    fix: the position error plus the fix's own error (:func:`_fixes`); NaN where nothing is
+    measured."""
     count, n = velocity.shape[0], len(layout.names)
-    rows = 3 if taxi is None else 4
+    rows = 3 + (taxi is not None) + 2 * (fixes is not None)
     observation = np.zeros((count, rows, n))
     measured = np.full((count, rows), np.nan)
     observation[:park_steps, 0, VELOCITY.start] = 1.0
@@ -338,7 +350,38 @@ def _measurements(layout: Layout, velocity, attitude, correction, park_steps: in
             observation[k, 3, TILT] = tilt
             observation[k, 3, layout.wander.start + 1] = 1.0
             measured[k, 3] = across @ velocity[k, :2]
+    if fixes is not None:
+        observation[:, -2:, POSITION] = np.eye(2)
+        measured[:, -2:] = track - fixes
     return observation, measured
+
+
+def _fixes(positions, steps, park_steps: int) -> np.ndarray:
+    """The position fixes at the filter steps, north and east of the first fix (m; NaN where
+    none, and at the first itself).
+
+    ``positions`` (n, 2) are per sample, north and east of any origin, m, NaN where no fix.
+    The first fix at a step lies in the park, where the vehicle stands where the computed
+    track starts: the computed position less a later fix taken from the first is then the
+    position error plus the later fix's error less the first's. The position states start
+    with the first fix's error as their prior (sd ``position_sd``), and the first fix is not
+    measured again."""
+    positions = np.asarray(positions, dtype=float)
+    at = np.full((steps.size, 2), np.nan)
+    inside = steps < positions.shape[0]
+    at[inside] = positions[steps[inside]]
+    present = np.flatnonzero(np.isfinite(at).all(axis=1))
+    if not present.size or present[0] >= park_steps:
+        raise InputError(
+            "the position reference (positions=) has no fix in the park at a filter step "
+            f"(every {steps[1] - steps[0]} samples)",
+            fix="give fixes from the park on: the vehicle's position at rest ties them to the "
+            "computed track",
+        )
+    first = present[0]
+    relative = at - at[first]
+    relative[first] = np.nan
+    return relative
 
 
 def _velocity_error(model: "AlignmentModel", drift: float, velocity):
@@ -428,12 +471,17 @@ def _noise(layout: Layout, priors, inputs, densities, accel_walk: float, wander,
     return noise
 
 
-def _prior(layout: Layout, priors, reference_drift: float, duration: float, wander):
+def _prior(
+    layout: Layout, priors, reference_drift: float, duration: float, wander, position_sd=None
+):
     """The prior covariance of x_0 without drift (the coarse alignment's tilts, the
-    accelerometer biases, the calibrations' coefficients), each state's drift per unit s, and
-    the states' scales (their prior sd at the reference s)."""
+    accelerometer biases, the calibrations' coefficients; with a position reference, the
+    first fix's error ``position_sd``, m, as the position's: :func:`_fixes`), each state's
+    drift per unit s, and the states' scales (their prior sd at the reference s)."""
     n = len(layout.names)
     prior = np.zeros((n, n))
+    if position_sd is not None:
+        prior[POSITION, POSITION] = position_sd**2 * np.eye(2)
     tilt = np.arange(TILT.start, TILT.stop)
     prior[tilt, tilt] = np.array([TILT_PRIOR, TILT_PRIOR, HEADING_PRIOR]) ** 2
     prior[layout.accel, layout.accel] = ACCEL_BIAS_PRIOR**2 * np.eye(3)
@@ -447,8 +495,8 @@ def _prior(layout: Layout, priors, reference_drift: float, duration: float, wand
     if layout.wander is not None:
         prior[layout.wander, layout.wander] = wander_model(*wander)[2]
     scale = np.sqrt(np.diag(prior) + (reference_drift * shape) ** 2)
-    # Position and velocity start known (the vehicle is still where it is): scaled by sizes
-    # their errors reach, 1 m and 1 cm/s.
+    # Position and velocity start known (the vehicle is still where it is; but for the first
+    # fix's error): scaled by sizes their errors reach, 1 m and 1 cm/s.
     scale[POSITION] = 1.0
     scale[VELOCITY] = 0.01
     scale[layout.heading_change] = HEADING_CHANGE_SCALE
@@ -474,6 +522,8 @@ def fine_alignment(
     step_s: float = STEP_S,
     park_samples: int | None = None,
     taxi: TaxiReference | None = None,
+    positions=None,
+    position_sd: float = POSITION_SD,
 ) -> FineAlignment:
     """Mechanize a record from its coarse alignment and set up the fine-alignment model.
 
@@ -489,6 +539,13 @@ def fine_alignment(
     cross-track velocity as a measurement of (delta v, phi, the wander's rate)
     (:func:`~._taxi.cross_track_row`); the steps between (the start, the turns) are
     mechanized and measure nothing.
+
+    ``positions`` (n, 2; north and east of any origin, m, NaN where no fix), a position
+    reference (GNSS) per sample, adds at each step with a fix the computed position less the
+    fix as a measurement of the position error with the fix's sd ``position_sd`` (m, white):
+    the heading error turns the computed track away from the fixes by psi times the distance
+    run (../shared/NAVIGATION.md), so the fixes tell the heading without a known track
+    (:func:`_fixes`: the first fix lies in the park).
     """
     gyro = np.asarray(gyro, dtype=float)
     accel = np.asarray(accel, dtype=float)
@@ -513,10 +570,19 @@ def fine_alignment(
     accel_walk = bounding_walk_variance(
         "bias_instability", {"B": accel_instability}, duration, rate_hz
     )
-    prior, shape, scale = _prior(layout, priors, reference_drift, duration, wander)
     steps = np.arange(count) * size
     times = steps / rate_hz
     park_steps = int(np.sum(steps <= park_samples))
+    fixes = None if positions is None else _fixes(positions, steps, park_steps)
+    prior, shape, scale = _prior(
+        layout,
+        priors,
+        reference_drift,
+        duration,
+        wander,
+        None if fixes is None else position_sd,
+    )
+    track = north_east(trajectory.latitude[steps], trajectory.longitude[steps], height)
 
     heading_row = heading_sensitivity(attitude)
 
@@ -543,10 +609,14 @@ def fine_alignment(
             park_steps,
             legs,
             taxi,
+            track,
+            fixes,
         )
         n = len(layout.names)
         variances = np.full(measured.shape[1], velocity_noise**2)
         variances[2] = HEADING_SWAY**2 * STEP_S / step_s
+        if fixes is not None:
+            variances[-2:] = position_sd**2
         space = StateSpace(
             jnp.concatenate([jnp.eye(n)[None], transition]),
             jnp.concatenate([jnp.zeros((1, n, n)), process]),
@@ -564,7 +634,7 @@ def fine_alignment(
     correction = np.zeros((count, 3))
     legs = None if taxi is None else np.full(count, -1)
     model = assemble(correction, legs)
-    if taxi is not None:
+    if taxi is not None or fixes is not None:
         # Mechanized freely from the coarse alignment, the computed velocity carries the park's
         # errors (the Schuler loop's, up to m/s) into the taxi: the legs are found, and the
         # cross-track rows and the error model linearized, on the velocity less its error as
@@ -574,16 +644,21 @@ def fine_alignment(
         # by the heading error itself would lie off every leg, or on a leg only where the
         # wander happens to cancel it (the steps chosen by their own cross-track velocity, the
         # heading pulled towards zero). The taxi's smoother then relinearizes, and the legs are
-        # found again within LEG_TOLERANCE_DEG, until they no longer change.
+        # found again within LEG_TOLERANCE_DEG, until they no longer change. Position fixes are
+        # measured from the first model on (linear in the position error), and the model is
+        # relinearized at least once on the velocity they correct.
         velocity = trajectory.velocity[steps]
-        for _ in range(RELINEARIZATIONS):
+        for iteration in range(RELINEARIZATIONS):
             correction, heading_sd = _velocity_error(model, reference_drift, velocity)
-            widen = LEG_SIGMAS * heading_sd if (legs < 0).all() else 0.0
-            found = leg_steps(
-                times, velocity - correction, taxi.headings_deg, LEG_TOLERANCE_DEG + widen
-            )
-            found[steps < taxi.start_sample] = -1
-            if np.array_equal(found, legs):
+            found = legs
+            if taxi is not None:
+                widen = LEG_SIGMAS * heading_sd if (legs < 0).all() else 0.0
+                found = leg_steps(
+                    times, velocity - correction, taxi.headings_deg, LEG_TOLERANCE_DEG + widen
+                )
+                found[steps < taxi.start_sample] = -1
+            unchanged = legs is None or np.array_equal(found, legs)
+            if unchanged and (iteration > 0 or fixes is None):
                 break
             legs = found
             model = assemble(correction, legs)
@@ -604,6 +679,7 @@ def fine_alignment(
         step_samples=size,
         park_steps=park_steps,
         legs=legs,
+        fixes=fixes,
     )
 
 

@@ -9,7 +9,10 @@ GNSS, Inertial, and Multisensor Integrated Navigation Systems*, 2nd ed., eqs. 2.
 (radii), 2.123 (Earth rate), 5.44 (transport rate); Titterton & Weston (2004), ch. 3.
 """
 
+import math
+
 import jax.numpy as jnp
+import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._errors import InputError
@@ -44,6 +47,20 @@ def radii(latitude):
     transverse = SEMI_MAJOR_AXIS / jnp.sqrt(denominator)
     meridian = transverse * (1 - ECCENTRICITY_SQUARED) / denominator
     return meridian, transverse
+
+
+def north_east(latitude, longitude, height: float, origin=None):
+    """North and east of ``origin`` (latitude, longitude; default the first point), m, of
+    points at ``latitude`` and ``longitude`` (rad, arrays): the changes of each times the
+    meridian and transverse radii at the origin (plus ``height``, m), flat over the few km of
+    a taxi. Returns (n, 2)."""
+    latitude = np.asarray(latitude, dtype=float)
+    longitude = np.asarray(longitude, dtype=float)
+    start = (latitude[0], longitude[0]) if origin is None else origin
+    meridian, transverse = (float(r) for r in radii(start[0]))
+    north = (latitude - start[0]) * (meridian + height)
+    east = (longitude - start[1]) * (transverse + height) * math.cos(start[0])
+    return np.stack([north, east], axis=-1)
 
 
 def earth_rate_n(latitude):

@@ -62,7 +62,13 @@ def infield_text(document: dict) -> str:
             1,
             f"  taxi {taxi['start_s']:g}-{taxi['stop_s']:g} s, track headings "
             f"{', '.join(f'{h:g}' for h in taxi['track_heading_deg']) or 'none'} deg: "
-            f"{sum(taxi['steps_on_legs'])} s on the legs ({taxi['why']})",
+            f"{sum(taxi['steps_on_legs'])} s on the legs"
+            + (
+                f", {taxi['positions']['fixes_in_taxi']} position fixes"
+                if taxi.get("positions")
+                else ""
+            )
+            + f" ({taxi['why']})",
         )
     for direction, kinds in document["projections"].items():
         for kind, entry in kinds.items():

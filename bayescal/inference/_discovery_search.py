@@ -36,7 +36,6 @@ warm-up only what decays from power-on, a random walk what is spread over the sp
 1/f^2, a Gauss-Markov term what flattens below its corner frequency.
 """
 
-import dataclasses
 import math
 from collections.abc import Callable
 from functools import partial
@@ -57,7 +56,6 @@ from ..models._terms import (
 )
 from ..models.effects._base import Effect, SlotTerm
 from ..models.effects._catalogue import SEARCHED
-from ..models.effects.gauss_markov import GaussMarkov
 from ..models.effects.noise_burst import NoiseBurst
 from ..models.effects.outliers import Outliers, outlier_scan, without_outliers
 from ..models.effects.output_filter import OutputFilter
@@ -421,7 +419,7 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
         ):
             break  # nothing located: nothing left to explain
         report(f"trying terms beyond {', '.join(current.spec.terms())}")
-        candidates = _beside_time_constant(context, current, candidate_fits(context, current))
+        candidates = candidate_fits(context, current)
         if not candidates:
             break
         ranked = sorted(candidates.items(), key=lambda item: item[1][0].schwarz, reverse=True)
@@ -442,57 +440,12 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
             if len(ranked) > 1
             else ()
         )
-        findings = [_moved(finding, fit.spec, search) for finding in findings]
         findings.append(
             Finding(fit.spec.effects[-1], fit, log_bayes_factor, gain, gain_se, runner_up, search)
         )
         current = fit
         checks = run_checks(current, context.data)
     return current, checks, findings, undecided
-
-
-def _beside_time_constant(context: Context, current: ModelFit, candidates: dict) -> dict:
-    """``candidates`` with each low-band noise term (or ramp) fitted beside the model's
-    Gauss-Markov term with its correlation time searched again, where that scores higher.
-
-    The search fixes a term's correlation time when it is accepted; a Gauss-Markov term
-    accepted first on a record that also holds a random walk takes the time constant that
-    absorbs most of both (15 s where the truth was 3.8 s, in a 19-minute record), and beside
-    it at that time constant the random walk gains nothing (log BF 0.3, where the truth of
-    both expects 20-30 nats): the model's score with a new term is the maximum over every
-    nonlinear parameter, the one already held among them. The candidate's record says so
-    (``gauss_markov_s``: the searched profile, from which the term's interval is then
-    read)."""
-    (held,) = [e for e in current.spec.effects if isinstance(e, GaussMarkov)] or [None]
-    if held is None:
-        return candidates
-    moved = dict(candidates)
-    for name, (fit, search) in candidates.items():
-        effect = fit.spec.effects[-1]
-        if not isinstance(effect, SlotTerm) or effect.band != held.band:
-            continue
-
-        def make_spec(time_constant, spec=fit.spec):
-            return ModelSpec(
-                tuple(GaussMarkov(time_constant) if e is held else e for e in spec.effects)
-            )
-
-        # Its own profile, kept apart from the held term's (a candidate not accepted leaves
-        # the held term's time constant where it was).
-        found = context.search_time(make_spec, f"{held.name} beside {name}", shortest_s=0.0)
-        if found is not None and found[0].schwarz > fit.schwarz:
-            moved[name] = (found[0], {**search, "gauss_markov_s": found[1]})
-    return moved
-
-
-def _moved(finding: Finding, spec: ModelSpec, search: dict) -> Finding:
-    """``finding`` with its Gauss-Markov term at the correlation time the accepted model
-    ``spec`` holds, and the profile searched there (:func:`_beside_time_constant`); itself
-    otherwise."""
-    if not isinstance(finding.effect, GaussMarkov) or spec.has_instance(finding.effect):
-        return finding
-    (effect,) = [e for e in spec.effects if isinstance(e, GaussMarkov)]
-    return dataclasses.replace(finding, effect=effect, search=search["gauss_markov_s"])
 
 
 def _grid_finding(context: Context, current: ModelFit) -> Finding:

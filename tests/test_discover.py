@@ -312,3 +312,36 @@ def test_a_flat_time_profile_samples_its_interval_within_the_record(monkeypatch)
     _, record = _discovery.search_time(context, lambda t: t, "gauss_markov")
     times = record["time_constant_s"]
     assert min(times) >= 5.0 and max(times) == pytest.approx(600.0)
+
+
+def test_a_time_constant_below_the_grid_is_searched_down_to_a_sample(monkeypatch):
+    """The grid starts at 20 samples (0.4 s at 50 Hz); a Gauss-Markov term of 0.32 s (the
+    benchmark's short_gauss_markov, seed 27) scored 12.7 higher there than at 0.4 s, was held at
+    0.4 s, failed its Allan check and was withdrawn. A best point at the grid's start extends
+    it downward, as at its end upward: the peak is found, never below a sample period; a
+    warm-up (searched from 5 s) is not extended below its own floor."""
+    from types import SimpleNamespace
+
+    from bayescal.inference import _discovery_fit as _discovery
+
+    def peaked_at(peak):
+        def fit(spec):
+            return SimpleNamespace(
+                schwarz=-50.0 * (math.log(spec) - math.log(peak)) ** 2,
+                spec=SimpleNamespace(regressor_names=lambda: []),
+                beta=[],
+                noise={"gm_sigma": 0.0},
+            )
+
+        return fit
+
+    context = _time_search_context(600.0, rate_hz=50.0)
+    monkeypatch.setattr(_discovery, "fit_model", lambda context, spec: peaked_at(0.32)(spec))
+    _, record = _discovery.search_time(context, lambda t: t, "gauss_markov", shortest_s=0.0)
+    winner = record["time_constant_s"][int(np.argmax(record["score"]))]
+    assert winner == pytest.approx(0.32, rel=0.03)
+    assert min(record["time_constant_s"]) >= 1 / 50.0
+    context = _time_search_context(600.0, rate_hz=50.0)
+    monkeypatch.setattr(_discovery, "fit_model", lambda context, spec: peaked_at(2.0)(spec))
+    _, record = _discovery.search_time(context, lambda t: t, "warmup_transient")
+    assert min(record["time_constant_s"]) >= 5.0

@@ -55,9 +55,10 @@ class Search(Protocol):
         """The MAP fit of model ``spec``."""
 
     def search_time(self, make_spec, key: str, shortest_s: float = SHORTEST_DECAY_S):
-        """The best fit over a searched time constant from ``shortest_s`` (s; never below 20
-        samples) up: (fit, search record); None when the record is too short to search one
-        (its third no longer than the shortest)."""
+        """The best fit over a searched time constant from ``shortest_s`` (s; the grid from 20
+        samples, extended to a sample where its best is there) up: (fit, search record); None
+        when the record is too short to search one (its third no longer than the grid's
+        start)."""
 
     def line_frequency(self, fit) -> float:
         """The frequency of the strongest spectral line the fit leaves in its residual."""

@@ -267,14 +267,19 @@ def report(name: str, rows: list[dict]) -> None:
         error, sd, prior, covered = (column(key, i) for i in range(4))
         z = error / sd
         line = (
-            f"  {key:8} posterior sd mean {np.mean(sd):.3g} {unit}, RMS error "
+            f"  {key:8} posterior sd mean {np.mean(sd):.3g} {unit} (median "
+            f"{np.median(sd):.3g}, 10-90 % {np.quantile(sd, 0.1):.3g}-"
+            f"{np.quantile(sd, 0.9):.3g}), RMS error "
             f"{np.sqrt(np.mean(error**2)):.3g} {unit}; 90 % intervals cover "
             f"{100 * np.mean(covered):.1f} %; error/sd mean {z.mean():+.2f} sd {z.std():.2f}"
         )
         if key != "heading":
             line += f"; sd / prior sd {np.mean(sd / prior):.3f}"
         if key == "east":
-            line += f"; sd / ideal {IDEAL_EAST:g}: {np.mean(sd) / IDEAL_EAST:.2f}x"
+            line += (
+                f"; sd / ideal {IDEAL_EAST:g}: mean {np.mean(sd) / IDEAL_EAST:.2f}x, median "
+                f"{np.median(sd) / IDEAL_EAST:.2f}x"
+            )
         print(line)
     coefficients = np.array([row["coefficients"] for row in rows], dtype=float)
     per_gyro = coefficients.reshape(len(rows), len(GYROS), -1)

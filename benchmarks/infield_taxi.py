@@ -4,13 +4,15 @@ cover, how far the taxi narrows the east bias level, the ablations, and what the
 in free inertial navigation.
 
     nice -n 10 python benchmarks/infield_taxi.py [--scenarios 100] [--rate 100] [--seed 0]
-        [--aging 4] [--tactical] [--park-s 1200] [--warmup 20:38.6] [--gnss SD]
+        [--aging 4] [--tactical] [--park-s 1200] [--warmup 20:38.6] [--wander 0.5:20]
+        [--gnss SD] [--workers 1] [--no-ablations] [--every 10]
 
 Each scenario: benchmarks/infield_alignment.py's park (navigation grade, 20 minutes, latitude
 45 deg, heading 30 deg, warming 20 -> 38.6 degC), aged by ``--aging`` times the calibration's
 sd of c0, then a taxi of 10 minutes at 10 m/s (bc.Taxi): from rest along 30 deg for 330 s, a 90
 deg turn at 3 deg/s, 240 s along 120 deg; the vehicle wanders about the centre line
-(second-order Gauss-Markov, sd 0.5 m, time constant 20 s). Four updates per scenario:
+(second-order Gauss-Markov, ``--wander SD:TAU``, default sd 0.5 m, time constant 20 s; the
+same wander is given to the update, ``wander=(sd, tau)``). Four updates per scenario:
 
 - taxi: ``taxi=(1200, end), track_heading=(30, 120)``;
 - not aged: the same, on the scenario drawn with no aging since the calibration;
@@ -38,13 +40,34 @@ with 10 times the navigation grade's sds. ``--gnss SD``: the taxi also logs GNSS
 (white, once a second; drawn after the rest, so the IMU's record is the same), and a fifth
 update, "positions, no track", takes the heading from them alone (``positions=`` the
 latitude and longitude columns, ``position_sd=SD``, no track heading).
+
+The wander and the ideal. ../shared/NAVIGATION.md's ideal east sd (0.0040 deg/h) takes a
+known-track taxi with a 0.01 m/s cross-track velocity reference. The wander's cross-track
+velocity is that reference's error: for the second-order Gauss-Markov offset w of
+bayescal/navigation/_taxi.py (zeta = 1/sqrt(2), omega = 1/tau, white input of density
+q = 4 zeta omega^3 sd^2), the velocity's spectrum is omega'^2 q / |omega^2 - omega'^2 +
+2i zeta omega omega'|^2, whose integral gives var(dw/dt) = q / (4 zeta omega) = omega^2 sd^2
+(Gelb 1974, table 3.8-1): the velocity sd is sd / tau. The default 0.5 m over 20 s is
+0.025 m/s, 2.5 times the ideal's reference; 0.05 m over 20 s (benchmarks/infield_wander.py)
+is 0.0025 m/s. ``--wander 0.2:20`` (0.2 / 20 = 0.01 m/s) matches the ideal's velocity sd.
+It is correlated over tau, where the ideal's reference may be white, so the match is of the
+velocity's sd, not of the information per second.
+
+``--workers K`` runs the scenarios in K processes (spawned, each held to one thread:
+WORKER_ENV is set before they import numpy or JAX); each scenario is seeded by its own seed,
+so the figures are those of the serial run. ``--no-ablations`` keeps the two updates the main
+figures need (taxi, not aged) and drops the no-taxi and heading-forced-to-zero ones.
 """
 
 import argparse
+import functools
 import math
+import os
 import time
 
 import numpy as np
+
+from bayescal.navigation._taxi import WANDER_SD, WANDER_TIME_S
 
 IDEAL_EAST = 0.0040  # deg/h, ../shared/NAVIGATION.md
 GYROS = ("gyro_x", "gyro_y", "gyro_z")
@@ -54,6 +77,16 @@ CHI2_2_90 = 4.605  # the 90 % quantile of chi^2 with 2 dof
 FLIGHTS = {"parked": 0.0, "250 m/s": 250.0}  # m/s
 TACTICAL_GYRO = {"N": 0.05 / 60.0, "B": 0.05 / 3600.0}  # deg/s/sqrt(Hz), deg/s
 TACTICAL_SD_FACTOR = 10.0  # the tactical chamber calibration's sds over the navigation grade's
+WANDER = (WANDER_SD, WANDER_TIME_S)  # m, s: the simulator's and the update's default
+ABLATIONS = ("no taxi", "heading forced to zero")
+# One thread per worker: the pool's processes share the cores, and BLAS or XLA threads of
+# their own would oversubscribe them. Set before a worker imports numpy or JAX.
+WORKER_ENV = {
+    **dict.fromkeys(
+        ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"), "1"
+    ),
+    "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1",
+}
 
 
 def tactical(old) -> dict:
@@ -178,12 +211,16 @@ def one_scenario(
     aging: float,
     gyro_noise=None,
     park: dict | None = None,
+    wander: tuple[float, float] = WANDER,
+    ablations: bool = True,
     gnss: float | None = None,
 ) -> dict:
     import bayescal as bc
     from bayescal.navigation import _alignment
 
-    taxi = bc.Taxi(legs=LEGS, speed=10.0, gnss_sd=gnss)
+    taxi = bc.Taxi(
+        legs=LEGS, speed=10.0, wander_sd=wander[0], wander_time_s=wander[1], gnss_sd=gnss
+    )
     parks = {
         aged: bc.simulate_park(
             old,
@@ -198,7 +235,7 @@ def one_scenario(
     }
     park_s = parks[aging].truth["park_s"]
     end = parks[aging].recording.columns["time"][-1] + 1 / rate
-    taxied = {"taxi": (park_s, end), "track_heading": [h for h, _ in LEGS]}
+    taxied = {"taxi": (park_s, end), "track_heading": [h for h, _ in LEGS], "wander": wander}
     runs = {
         "taxi": (aging, taxied, -1),
         "not aged": (0.0, taxied, -1),
@@ -208,6 +245,8 @@ def one_scenario(
     if gnss is not None:
         fixes = {"positions": "gnss_latitude,gnss_longitude", "position_sd": gnss}
         runs["positions, no track"] = (aging, {"taxi": (park_s, end), **fixes}, -1)
+    if not ablations:
+        runs = {name: run for name, run in runs.items() if name not in ABLATIONS}
     rows = {}
     for name, (aged, extra, last) in runs.items():
         saved = _alignment.HEADING_PRIOR
@@ -237,14 +276,19 @@ def report(name: str, rows: list[dict]) -> None:
         error, sd, prior, covered = (column(key, i) for i in range(4))
         z = error / sd
         line = (
-            f"  {key:8} posterior sd mean {np.mean(sd):.3g} {unit}, RMS error "
+            f"  {key:8} posterior sd mean {np.mean(sd):.3g} {unit} (median "
+            f"{np.median(sd):.3g}, 10-90 % {np.quantile(sd, 0.1):.3g}-"
+            f"{np.quantile(sd, 0.9):.3g}), RMS error "
             f"{np.sqrt(np.mean(error**2)):.3g} {unit}; 90 % intervals cover "
             f"{100 * np.mean(covered):.1f} %; error/sd mean {z.mean():+.2f} sd {z.std():.2f}"
         )
         if key != "heading":
             line += f"; sd / prior sd {np.mean(sd / prior):.3f}"
         if key == "east":
-            line += f"; sd / ideal {IDEAL_EAST:g}: {np.mean(sd) / IDEAL_EAST:.2f}x"
+            line += (
+                f"; sd / ideal {IDEAL_EAST:g}: mean {np.mean(sd) / IDEAL_EAST:.2f}x, median "
+                f"{np.median(sd) / IDEAL_EAST:.2f}x"
+            )
         print(line)
     coefficients = np.array([row["coefficients"] for row in rows], dtype=float)
     per_gyro = coefficients.reshape(len(rows), len(GYROS), -1)
@@ -307,6 +351,63 @@ def report_payoff(rows: list[dict]) -> None:
         )
 
 
+@functools.cache
+def calibrations(tactical_grade: bool) -> tuple:
+    """The old calibrations and the gyros' noise (None: the simulator's navigation grade)."""
+    from bayescal.capabilities._examples import example_gyro_calibrations
+
+    old = example_gyro_calibrations()
+    return (tactical(old), TACTICAL_GYRO) if tactical_grade else (old, None)
+
+
+def scenario(seed: int, options: dict) -> dict:
+    """One scenario's rows from picklable ``options`` (the pool's unit of work)."""
+    old, noise = calibrations(options["tactical"])
+    return one_scenario(
+        seed,
+        old,
+        options["rate"],
+        options["aging"],
+        noise,
+        options["park"],
+        options["wander"],
+        options["ablations"],
+        options["gnss"],
+    )
+
+
+def scenarios(seeds, options: dict, workers: int = 1):
+    """Each seed's rows, in the seeds' order: in this process, or in ``workers`` spawned ones
+    held to one thread each (WORKER_ENV)."""
+    if workers == 1:
+        yield from (scenario(seed, options) for seed in seeds)
+        return
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    # Spawned children copy this environment at their start, before their first import.
+    saved = {name: os.environ.get(name) for name in WORKER_ENV}
+    os.environ.update(WORKER_ENV)
+    try:
+        context = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(workers, mp_context=context) as pool:
+            yield from pool.map(scenario, seeds, [options] * len(seeds))
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+def pair(text: str, flag: str) -> tuple[float, float]:
+    try:
+        first, second = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise SystemExit(f"{flag} {text!r}: give two numbers as A:B") from None
+    return first, second
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenarios", type=int, default=100)
@@ -318,24 +419,52 @@ def main() -> None:
     parser.add_argument("--park-s", type=float, default=1200.0, help="the park's length, s")
     parser.add_argument("--warmup", default="20:38.6", help="START:END degC over the park")
     parser.add_argument("--gnss", type=float, help="GNSS fixes of this sd (m) in the taxi")
+    parser.add_argument(
+        "--wander",
+        default=f"{WANDER[0]:g}:{WANDER[1]:g}",
+        help="SD:TAU, m and s: the vehicle's wander about the centre line, simulated and given "
+        "to the update (velocity sd SD / TAU; 0.2:20 matches NAVIGATION.md's 0.01 m/s)",
+    )
+    parser.add_argument("--workers", type=int, default=1, help="processes, one thread each")
+    parser.add_argument(
+        "--no-ablations",
+        dest="ablations",
+        action="store_false",
+        help="only the taxi and not-aged updates (two per scenario, not four)",
+    )
     args = parser.parse_args()
-    start, end = (float(x) for x in args.warmup.split(":"))
-    park = {"duration_s": args.park_s, "warmup": (start, end)}
-    from bayescal.capabilities._examples import example_gyro_calibrations
-
-    old = example_gyro_calibrations()
-    noise = None
-    if args.tactical:
-        old, noise = tactical(old), TACTICAL_GYRO
+    if args.workers < 1:
+        raise SystemExit(f"--workers {args.workers}: give 1 or more")
+    wander = pair(args.wander, "--wander")
+    options = {
+        "rate": args.rate,
+        "aging": args.aging,
+        "tactical": args.tactical,
+        "park": {"duration_s": args.park_s, "warmup": pair(args.warmup, "--warmup")},
+        "wander": wander,
+        "ablations": args.ablations,
+        "gnss": args.gnss,
+    }
+    print(
+        f"wander sd {wander[0]:g} m, time constant {wander[1]:g} s: cross-track velocity sd "
+        f"{wander[0] / wander[1]:.4g} m/s; {args.workers} worker(s)",
+        flush=True,
+    )
+    started = time.perf_counter()
     results: dict[str, list] = {}
-    for index in range(args.scenarios):
-        rows = one_scenario(args.seed + index, old, args.rate, args.aging, noise, park, args.gnss)
+    seeds = [args.seed + index for index in range(args.scenarios)]
+    for index, rows in enumerate(scenarios(seeds, options, args.workers)):
         for name, row in rows.items():
             results.setdefault(name, []).append(row)
         if (index + 1) % args.every == 0 or index + 1 == args.scenarios:
-            print(f"... {index + 1} scenarios", flush=True)
-            for name, rows in results.items():
-                report(name, rows)
+            elapsed = time.perf_counter() - started
+            print(
+                f"... {index + 1} scenarios, {elapsed:.0f} s wall "
+                f"({elapsed / (index + 1):.0f} s per scenario)",
+                flush=True,
+            )
+            for name, collected in results.items():
+                report(name, collected)
 
 
 if __name__ == "__main__":

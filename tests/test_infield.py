@@ -5,6 +5,7 @@ the command line end to end, the calibration file of several channels, and bad i
 import json
 import math
 import re
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -462,6 +463,42 @@ def test_a_position_reference_that_cannot_be_used_is_refused(run_cli, old, taxi_
     assert code == 2, err
     assert "--positions gnss_lat,gnss_longitude" in err and "gnss_lat'" in err, err
     assert "Traceback" not in err and not (tmp_path / "out.json").exists()
+
+
+def test_the_taxi_benchmark_gives_its_wander_to_the_vehicle_and_to_the_update(monkeypatch, old):
+    """benchmarks/infield_taxi.py's ``--wander SD:TAU`` reaches both the simulated vehicle
+    (bc.Taxi's wander_sd, wander_time_s) and every taxi update (``wander=(sd, tau)``), and
+    ``--no-ablations`` leaves the two updates the main figures need (taxi, not aged). The
+    simulator and the update are stand-ins here: what is tested is the wiring, which decides
+    whether the figure is measured at the wander it is said to be."""
+    taxi = load_benchmark("infield_taxi")
+    simulated, updates = [], []
+
+    park = SimpleNamespace(
+        truth={"park_s": 1200.0, "trajectory": {"heading": np.full(18000, 30.0)}},
+        recording=SimpleNamespace(columns={"time": np.arange(0.0, 1800.0, 0.1)}),
+    )
+
+    def simulate_park(calibrations, taxi, **options):
+        simulated.append((taxi.wander_sd, taxi.wander_time_s, options["aging"]))
+        return park
+
+    def infield_update(recording, calibrations, **options):
+        updates.append(options)
+
+    monkeypatch.setattr(bc, "simulate_park", simulate_park)
+    monkeypatch.setattr(bc, "infield_update", infield_update)
+    monkeypatch.setattr(taxi, "summarize", lambda *args: {})
+    monkeypatch.setattr(taxi, "payoff", lambda *args: {})
+    rows = taxi.one_scenario(7, old, 10.0, 4.0, wander=(0.2, 20.0), ablations=False)
+    assert list(rows) == ["taxi", "not aged"]
+    assert simulated == [(0.2, 20.0, 4.0), (0.2, 20.0, 0.0)]
+    assert [u["wander"] for u in updates] == [(0.2, 20.0)] * 2
+    assert all(u["seed"] == 7 and u["taxi"] == (1200.0, 1800.0) for u in updates)
+    updates.clear()
+    rows = taxi.one_scenario(7, old, 10.0, 4.0)
+    assert list(rows) == ["taxi", "not aged", "no taxi", "heading forced to zero"]
+    assert [u.get("wander") for u in updates] == [taxi.WANDER] * 2 + [None] * 2
 
 
 def test_a_taxi_whose_wander_exceeds_its_model_fails_the_legs_check(

@@ -501,6 +501,26 @@ def test_the_taxi_benchmark_gives_its_wander_to_the_vehicle_and_to_the_update(mo
     assert [u.get("wander") for u in updates] == [taxi.WANDER] * 2 + [None] * 2
 
 
+def _taxi_command(folder, end: float) -> tuple:
+    """``bayescal thermal infield`` on the taxi_run fixture's record: its park, its taxi to
+    ``end`` s and the two legs' headings."""
+    return (
+        "thermal",
+        "infield",
+        folder / "taxi.csv",
+        "--calibration",
+        folder / "old.json",
+        "--latitude",
+        "45",
+        "--align",
+        "0:600",
+        "--taxi",
+        f"600:{end:g}",
+        "--track-heading",
+        "30,120",
+    )
+
+
 def test_a_taxi_whose_wander_exceeds_its_model_fails_the_legs_check(
     run_cli, old, taxi_run, tmp_path
 ):
@@ -521,19 +541,7 @@ def test_a_taxi_whose_wander_exceeds_its_model_fails_the_legs_check(
     right = bc.infield_update(park.recording, old, **options)
     assert all(leg["passed"] for leg in right.checks["taxi_innovations"])
     code, out, err = run_cli(
-        "thermal",
-        "infield",
-        folder / "taxi.csv",
-        "--calibration",
-        folder / "old.json",
-        "--latitude",
-        "45",
-        "--align",
-        "0:600",
-        "--taxi",
-        f"600:{end:g}",
-        "--track-heading",
-        "30,120",
+        *_taxi_command(folder, end),
         "--wander",
         "0.05:20",
         "--unit",
@@ -564,19 +572,7 @@ def test_the_report_page_of_a_park_and_taxi(run_cli, taxi_run, tmp_path):
     holds the track the page draws, its steps on each leg those the filter used."""
     _, end, folder = taxi_run
     code, out, err = run_cli(
-        "thermal",
-        "infield",
-        folder / "taxi.csv",
-        "--calibration",
-        folder / "old.json",
-        "--latitude",
-        "45",
-        "--align",
-        "0:600",
-        "--taxi",
-        f"600:{end:g}",
-        "--track-heading",
-        "30,120",
+        *_taxi_command(folder, end),
         "--unit",
         "deg/s",
         "--seed",

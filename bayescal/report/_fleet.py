@@ -23,7 +23,7 @@ from ..inference._population import MIN_POINT_ESS, RESOLVED_LOG_SD
 from ..models._population import BIAS_SD_PRIOR_FACTOR, LOG_SD_PRIOR_SCALE
 from ..models._terms import parameter_unit
 from ._figures import embedded, new_figure
-from ._format import STYLE, esc, interval, num, pretty_unit
+from ._format import esc, interval, num, page_start, pretty_unit
 
 _NAMES = {"N": "N white noise", "B": "B bias instability", "K": "K rate random walk"}
 
@@ -347,11 +347,7 @@ def fleet_page(fleet: FleetFit) -> str:
     title = f"Fleet {fleet.source}: {fleet.channel}"
     summary = fleet.summary
     parts = [
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8">',
-        '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{esc(title)}</title><style>{STYLE}</style></head><body>",
-        f"<h1>{esc(title)}</h1>",
+        *page_start(title),
         f"<p class='note'>{len(fleet.units)} units, {len(fleet.recordings)} recordings, "
         f"unit {esc(fleet.unit)}, terms {esc(', '.join(fleet.terms))} — bayescal "
         f"{esc(version('bayescal'))}, {created}</p>",

@@ -34,6 +34,18 @@ def esc(value) -> str:
     return html.escape(str(value), quote=True)
 
 
+def page_start(title: str) -> list[str]:
+    """The opening of every page: the document's head with :data:`STYLE` and ``title`` as
+    its heading."""
+    return [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
+        f"<title>{esc(title)}</title><style>{STYLE}</style></head><body>",
+        f"<h1>{esc(title)}</h1>",
+    ]
+
+
 def num(value, digits: int = 4) -> str:
     """A number with ``digits`` significant digits; ``n/a`` for None or not finite."""
     if value is None:

@@ -26,10 +26,10 @@ from ._discovery import Findings, discovery_document, discovery_figures
 from ._figures import allan_figure, embedded, pair_figure, spectrum_figure
 from ._filter_config import ReportFilterNoise, filter_section, report_filter_document
 from ._format import (
-    STYLE,
     esc,
     interval,
     num,
+    page_start,
     percent,
     pretty_unit,
     quantity,
@@ -865,11 +865,7 @@ def build_report(
     invalid = [a for a in analyses if not a.noise.classical.t_interval.valid]
     created = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
     parts = [
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8">',
-        '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{esc(title)}</title><style>{STYLE}</style></head><body>",
-        f"<h1>{esc(title)}</h1>",
+        *page_start(title),
         f"<p class='note'>{esc(source)} — bayescal {esc(version('bayescal'))}, {created}</p>",
     ]
     if failed:

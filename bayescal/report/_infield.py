@@ -22,7 +22,7 @@ from ._figures import (
     infield_points_figure,
     infield_track_figure,
 )
-from ._format import STYLE, esc, interval, num, pretty_unit, quantity
+from ._format import esc, interval, num, page_start, pretty_unit, quantity
 
 FLIGHTS = {"parked": 0.0, "at 250 m/s, turning 90° every 15 min": 250.0}
 """The free-inertial checks of the page: flight -> ground speed, m/s (the benchmark's)."""
@@ -332,11 +332,7 @@ def infield_page(update: InFieldUpdate, *, source: str) -> str:
     }
     temperature_unit = next(iter(update.calibration.values())).temperature_unit
     parts = [
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8">',
-        '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{esc(title)}</title><style>{STYLE}</style></head><body>",
-        f"<h1>{esc(title)}</h1>",
+        *page_start(title),
         f"<p class='note'>Alignment {quantity(alignment['start_s'], 's')} to "
         f"{quantity(alignment['stop_s'], 's')} at latitude "
         f"{quantity(alignment['latitude_deg'], 'deg')}, height "

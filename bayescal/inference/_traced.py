@@ -26,7 +26,6 @@ import functools
 import hashlib
 import os
 import sys
-import threading
 from collections.abc import Callable
 from importlib.metadata import version
 from pathlib import Path
@@ -79,9 +78,6 @@ def persistent_jit(fun: Callable) -> Callable:
     call."""
     jitted = eqx.filter_jit(fun)
     compiled = {}
-    # Solves run side by side in threads (the term search's rounds): one loads or traces a
-    # function while the others wait for it, instead of each doing it again.
-    lock = threading.Lock()
 
     def specialised(*args):
         dynamic, static = eqx.partition(args, eqx.is_array)
@@ -94,15 +90,14 @@ def persistent_jit(fun: Callable) -> Callable:
                 return jitted(*eqx.combine(jax.tree_util.tree_unflatten(treedef, arrays), static))
 
             return traced, leaves
-        with lock:
-            if key not in compiled:
-                path = Path(folder) / f"{fun.__name__}-{key}.stablehlo"
-                exported = _load(path)
-                if exported is None:
-                    _announce(folder)
-                    exported = _export_and_store(fun, treedef, static, leaves, path)
-                compiled[key] = jax.jit(exported.call)
-            return compiled[key], leaves
+        if key not in compiled:
+            path = Path(folder) / f"{fun.__name__}-{key}.stablehlo"
+            exported = _load(path)
+            if exported is None:
+                _announce(folder)
+                exported = _export_and_store(fun, treedef, static, leaves, path)
+            compiled[key] = jax.jit(exported.call)
+        return compiled[key], leaves
 
     @functools.wraps(fun)
     def call(*args):
@@ -194,7 +189,7 @@ def _export_and_store(fun, treedef, static, leaves, path: Path):
         return fun(*eqx.combine(jax.tree_util.tree_unflatten(treedef, arrays), static))
 
     exported = jax.export.export(jax.jit(flat))(*leaves)
-    partial = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.partial")
+    partial = path.with_suffix(f".{os.getpid()}.partial")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         partial.write_bytes(exported.serialize())

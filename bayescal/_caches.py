@@ -115,9 +115,10 @@ def release_compiled_code(fraction: float = 0.5) -> bool:
     keeps the function: a long session that fits records of twenty lengths, or a test run of
     hundreds of models, reaches the limit, and the next compilation then dies of a
     segmentation fault inside XLA instead of an error. Dropped (``jax.clear_caches``), a
-    function is compiled again when next called, from the on-disk caches (module docstring)
-    in about a second. A caller's own jitted functions are dropped too, and recompiled the
-    same way. Nowhere to read the maps (not Linux): nothing is done.
+    function is compiled again when next called, from the on-disk caches (module docstring):
+    the next fit costs what a first fit in a new process does (measured at 30,000 samples,
+    load ~10: 8.4 s against 1.1 s warm). A caller's own jitted functions are dropped too, and
+    recompiled the same way. Nowhere to read the maps (not Linux): nothing is done.
     """
     jax = sys.modules.get("jax")
     if jax is None:

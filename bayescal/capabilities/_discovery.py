@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .._caches import release_compiled_code
-from .._errors import HealthCheckError, InputError
+from .._errors import InputError
 from ..inference._discovery_fit import DiscoveryData
 from ..inference._discovery_posterior import FinalPosterior, sample_final
 from ..inference._discovery_search import (
@@ -35,6 +35,7 @@ from ..models.effects.quantization import Quantization
 from ..models.effects.saturation import Saturation
 from ..recording._inputs import channel_input, check_same_length, samples
 from ..recording._recording import Channel
+from ._checked import Checked
 from ._discovery_unexplained import unexplained_of
 
 AMBIGUOUS_LOG_BAYES_FACTOR = math.log(10.0)
@@ -97,13 +98,17 @@ class CheckResult:
 
 
 @dataclass(frozen=True)
-class Discovery:
+class Discovery(Checked):
     """What :func:`discover` found: the effects named (``effects``), every check before and
     after (``checks``), the final model's terms and posterior, and what is left unexplained.
 
     ``passed`` is whether the final posterior passed its sampler checks (true when no effect
     was found and none was sampled); :meth:`check` raises when it did not.
     """
+
+    @property
+    def _check_subject(self) -> str:
+        return f"discovery on {self.channel}"
 
     channel: str
     """The channel's name."""
@@ -163,32 +168,6 @@ class Discovery:
                     "evidence disagrees with itself, so the effect is not established"
                 )
         return failures
-
-    @property
-    def passed(self) -> bool:
-        """Whether the final posterior passed its sampler checks (True when nothing was
-        found, so nothing was sampled) and every named effect's evidence agrees with its
-        predictive accuracy (:attr:`failures`)."""
-        return not self.failures
-
-    def check(self) -> "Discovery":
-        """Raise :class:`~bayescal.HealthCheckError` when the final posterior failed its
-        checks or an effect's evidence disagrees with itself.
-
-        Returns
-        -------
-        Discovery
-            This result, unchanged, when every check passed, so that the call chains
-            (``result = capability(...).check()``).
-
-        Raises
-        ------
-        HealthCheckError
-            A check failed; the message names each.
-        """
-        if not self.passed:
-            raise HealthCheckError(f"discovery on {self.channel}: " + "; ".join(self.failures))
-        return self
 
 
 def _evidence(finding: Finding, result: SearchResult, failed_before, after) -> tuple[dict, str]:

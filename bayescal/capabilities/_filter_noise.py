@@ -49,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._caches import release_compiled_code
-from .._errors import HealthCheckError, InputError
+from .._errors import InputError
 from ..models._terms import (
     BOUNDING_FRACTION,
     FILTER_SHAPE_OF_TERM,
@@ -61,6 +61,7 @@ from ..models._terms import (
 from ..navigation._aiding import Aiding, aided_horizon
 from ..recording._inputs import channel_input
 from ..recording._units import parse_unit
+from ._checked import Checked
 from ._estimators import SENSORS, SI, Estimator, sensor_of_unit
 from ._estimators import estimator as find_estimator
 from ._noise import NoiseFit
@@ -113,7 +114,7 @@ class ChannelNoise:
 
 
 @dataclass(frozen=True)
-class FilterNoise:
+class FilterNoise(Checked):
     """The noise values of a navigation filter (:func:`filter_noise`)."""
 
     estimator: Estimator
@@ -135,28 +136,6 @@ class FilterNoise:
     """The posteriors' failed checks, by channel."""
     notes: tuple[str, ...] = ()
     """What was noticed across channels (rates that differ ...)."""
-
-    @property
-    def passed(self) -> bool:
-        """Whether every channel's posterior passed its sampler and fit checks."""
-        return not self.failures
-
-    def check(self) -> "FilterNoise":
-        """Raise :class:`~bayescal.HealthCheckError` naming the failed checks, if any.
-
-        Returns
-        -------
-        FilterNoise
-            This result, unchanged, when every check passed.
-
-        Raises
-        ------
-        HealthCheckError
-            A channel's posterior failed a check; the message names each.
-        """
-        if self.failures:
-            raise HealthCheckError("; ".join(self.failures))
-        return self
 
     @property
     def summary(self) -> dict:

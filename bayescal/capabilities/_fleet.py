@@ -41,6 +41,7 @@ from ..inference._sampler import Sampler, sampler_of
 from ..models._terms import CLASSICAL_TERMS, display_values, fleet_terms, parameter_unit
 from ..recording._manifest import Manifest, read_manifest
 from ..recording._sensor_cards import SensorCard, find_card
+from ._checked import Checked
 from ._fleet_spec import assessed_limits, checked_spec
 from ._fleet_tasks import RecordingFailure, RecordingTask, run_batched, run_on_cluster
 
@@ -60,7 +61,7 @@ def _not_identified(unit: str, why: str) -> dict:
 
 
 @dataclass(frozen=True)
-class FleetFit:
+class FleetFit(Checked):
     """A fleet's population: the population of its units' noise scales and turn-on bias, each
     unit's estimate shrunk toward it, the next unit's predictive distribution, and the
     probability that a unit meets a specification (:func:`fit_fleet`).
@@ -69,6 +70,8 @@ class FleetFit:
     ``bayescal fleet`` renders it); :attr:`population` is the posterior itself; :meth:`check`
     raises when it failed its checks.
     """
+
+    _check_subject = "population: checks failed"
 
     source: str
     """The manifest."""
@@ -115,24 +118,6 @@ class FleetFit:
     def failures(self) -> tuple[str, ...]:
         """The population's failed checks (empty when it passed)."""
         return self.population.failures
-
-    def check(self) -> "FleetFit":
-        """Raise :class:`~bayescal.HealthCheckError` naming the failed checks, if any.
-
-        Returns
-        -------
-        FleetFit
-            This result, unchanged, when every check passed, so that the call chains
-            (``result = capability(...).check()``).
-
-        Raises
-        ------
-        HealthCheckError
-            A check failed; the message names each.
-        """
-        if not self.passed:
-            raise HealthCheckError("population: checks failed: " + "; ".join(self.failures))
-        return self
 
     @cached_property
     def predictive(self) -> dict:

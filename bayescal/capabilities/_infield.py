@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._caches import release_compiled_code
-from .._errors import HealthCheckError, InputError
+from .._errors import InputError
 from .._output import to_jsonable
 from ..classical._gravity import normal_gravity
 from ..inference._infield import sample_alignment
@@ -42,6 +42,7 @@ from ..navigation._simulate import ACCELEROMETERS, GYROS
 from ..navigation._taxi import WANDER_SD, WANDER_TIME_S, TaxiReference
 from ..recording._recording import Recording, load_recording
 from ..recording._units import parse_unit
+from ._checked import Checked
 from ._infield_inputs import (
     alignment_window,
     check_wander,
@@ -73,7 +74,7 @@ ACCEL_INSTABILITY = 1e-5
 
 
 @dataclass(frozen=True)
-class InFieldUpdate:
+class InFieldUpdate(Checked):
     """The gyro thermal calibrations updated from an alignment at rest, with what the
     alignment could and could not tell.
 
@@ -132,6 +133,8 @@ class InFieldUpdate:
         between the gyros that the per-gyro calibrations drop.
     """
 
+    _check_subject = "in-field update"
+
     calibration: dict
     heading_error: dict
     points: dict
@@ -153,22 +156,10 @@ class InFieldUpdate:
         """Whether every check passed."""
         return bool(self.checks["passed"])
 
-    def check(self) -> "InFieldUpdate":
-        """Raise :class:`~bayescal.HealthCheckError` naming the failed checks, if any.
-
-        Returns
-        -------
-        InFieldUpdate
-            This result, unchanged, when every check passed.
-
-        Raises
-        ------
-        HealthCheckError
-            A check failed; the message names each.
-        """
-        if not self.passed:
-            raise HealthCheckError("in-field update: " + "; ".join(self.checks["failures"]))
-        return self
+    @property
+    def failures(self) -> tuple[str, ...]:
+        """Each failed check, in words (empty when every check passed)."""
+        return tuple(self.checks["failures"])
 
     def position_error(
         self,

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._caches import release_compiled_code
-from .._errors import HealthCheckError, InputError
+from .._errors import InputError
 from ..classical._gravity import LocalGravity
 from ..classical._multi_position import (
     ORIENTATIONS,
@@ -29,6 +29,7 @@ from ..recording._inputs import channel_input
 from ..recording._recording import Channel
 from ..recording._sections import MIN_DURATION_S
 from ..recording._units import parse_unit
+from ._checked import Checked
 
 
 def scale_unit(unit: str) -> str:
@@ -39,10 +40,12 @@ def scale_unit(unit: str) -> str:
 
 
 @dataclass(frozen=True)
-class MultiPositionCalibration:
+class MultiPositionCalibration(Checked):
     """A multi-position calibration of a three-axis accelerometer
     (:func:`calibrate_multi_position`): the poses, the classical least squares and the
     posterior."""
+
+    _check_subject = "multi-position: posterior checks failed"
 
     unit: str
     """The readings' unit (counts welcome); offsets are in it, scales in m/s^2 per it."""
@@ -107,26 +110,10 @@ class MultiPositionCalibration:
         """Whether the posterior passed its sampler checks (True when none was sampled)."""
         return self.bayesian is None or bool(self.bayesian.diagnostics.passed)
 
-    def check(self) -> "MultiPositionCalibration":
-        """Raise :class:`~bayescal.HealthCheckError` when the posterior failed its checks.
-
-        Returns
-        -------
-        MultiPositionCalibration
-            This result, unchanged, when every check passed, so that the call chains
-            (``result = capability(...).check()``).
-
-        Raises
-        ------
-        HealthCheckError
-            A check failed; the message names each.
-        """
-        if not self.passed:
-            raise HealthCheckError(
-                "multi-position: posterior checks failed: "
-                + "; ".join(self.bayesian.diagnostics.failures)
-            )
-        return self
+    @property
+    def failures(self) -> tuple[str, ...]:
+        """The posterior's failed sampler checks (empty when it passed or none was sampled)."""
+        return () if self.bayesian is None else tuple(self.bayesian.diagnostics.failures)
 
 
 def calibrate_multi_position(

@@ -9,7 +9,7 @@ from functools import cached_property, partial
 import numpy as np
 
 from .._caches import release_compiled_code
-from .._errors import HealthCheckError, InputError
+from .._errors import InputError
 from .._stages import stage
 from ..classical._noise import ClassicalNoise, classical_noise
 from ..inference._checks import FitCheck, noise_model_checker
@@ -38,10 +38,11 @@ from ..models.effects.spectral_lines import SpectralLines
 from ..recording._inputs import channel_input
 from ..recording._levels import discrete_step
 from ..recording._sensor_cards import SensorCard, find_card
+from ._checked import Checked
 
 
 @dataclass(frozen=True)
-class NoiseFit:
+class NoiseFit(Checked):
     """The noise of one static channel: the classical block beside the posterior of the
     noise model (:func:`fit_noise`), and whether that model fits the record.
 
@@ -52,6 +53,10 @@ class NoiseFit:
     model that does not fit is not healthy, whatever its sampler says); :meth:`check` raises
     when the sampler's checks or the fit's failed.
     """
+
+    @property
+    def _check_subject(self) -> str:
+        return f"{self.channel}: posterior checks failed"
 
     channel: str
     """The channel's name."""
@@ -156,26 +161,6 @@ class NoiseFit:
         from ..inference._datatree import noise_datatree
 
         return noise_datatree(self.fit, self.unit, channel=self.channel, source=self.source)
-
-    def check(self) -> "NoiseFit":
-        """Raise :class:`~bayescal.HealthCheckError` naming the failed checks, if any.
-
-        Returns
-        -------
-        NoiseFit
-            This result, unchanged, when every check passed, so that the call chains
-            (``result = capability(...).check()``).
-
-        Raises
-        ------
-        HealthCheckError
-            A check failed; the message names each.
-        """
-        if not self.passed:
-            raise HealthCheckError(
-                f"{self.channel}: posterior checks failed: " + "; ".join(self.failures)
-            )
-        return self
 
 
 def noise_priors(

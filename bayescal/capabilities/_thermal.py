@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._errors import HealthCheckError, InputError
+from .._errors import InputError
 from .._output import to_jsonable, write_json
 from ..inference._sampler import Sampler, sampler_of
 from ..inference._thermal_posterior import ThermalFit, calibrated_noise_prior, sample_thermal
@@ -46,6 +46,7 @@ from ..recording._inputs import (
     temperature_of,
 )
 from ..recording._recording import Channel
+from ._checked import Checked
 from ._thermal_file import (
     SCHEMA,
     SCHEMA_VERSION,
@@ -76,7 +77,7 @@ def provenance_step(step: str, *, source: str, channel: str, n_samples: int, see
 
 
 @dataclass(frozen=True)
-class ThermalCalibration:
+class ThermalCalibration(Checked):
     """A thermal bias calibration: the polynomial bias(T) = sum_j c_j (T - T0)^j with its
     posterior covariance, the noise beside it, and how it was made.
 
@@ -85,6 +86,8 @@ class ThermalCalibration:
     :meth:`save` writes its file. ``coefficients`` are in the units of
     ``coefficient_units``.
     """
+
+    _check_subject = "thermal calibration: posterior checks failed"
 
     channel: str
     """The channel it was made for."""
@@ -164,26 +167,6 @@ class ThermalCalibration:
         if diagnostics is None:
             return ["the calibration carries no record of its posterior checks"]
         return list(diagnostics.get("failures", []))
-
-    def check(self) -> "ThermalCalibration":
-        """Raise :class:`~bayescal.HealthCheckError` naming the failed checks, if any.
-
-        Returns
-        -------
-        ThermalCalibration
-            This result, unchanged, when every check passed, so that the call chains
-            (``result = capability(...).check()``).
-
-        Raises
-        ------
-        HealthCheckError
-            A check failed; the message names each.
-        """
-        if not self.passed:
-            raise HealthCheckError(
-                "thermal calibration: posterior checks failed: " + "; ".join(self.failures)
-            )
-        return self
 
     def bias(self, temperature) -> tuple[np.ndarray, np.ndarray]:
         """The thermal bias at ``temperature`` and its posterior sd.

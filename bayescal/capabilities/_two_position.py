@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._caches import release_compiled_code
-from .._errors import HealthCheckError, InputError
+from .._errors import InputError
 from ..classical._allan import allan_deviation
 from ..classical._gravity import LocalGravity
 from ..classical._two_position import Section, check_sections, classical_two_position
@@ -27,6 +27,7 @@ from ..models._terms import DEFAULT_TERMS, check_terms, parse_terms
 from ..models._two_position import offset_drift_variance
 from ..recording._inputs import channel_input, positive_rate
 from ..recording._recording import Channel
+from ._checked import Checked
 from ._noise import noise_posterior
 
 
@@ -137,10 +138,12 @@ def bayesian_two_position(
 
 
 @dataclass(frozen=True)
-class TwoPositionCalibration:
+class TwoPositionCalibration(Checked):
     """A two-position calibration of one accelerometer axis (:func:`calibrate_two_position`):
     the classical answer (each entry ``(value, half-width at confidence)``) and the posterior
     (draws of scale, offset and g_local, MAP with Laplace sd, the noise posterior)."""
+
+    _check_subject = "two-position: posterior checks failed"
 
     channel: str
     """The channel's name."""
@@ -201,31 +204,6 @@ class TwoPositionCalibration:
             *self.bayesian.noise.diagnostics.failures,
             *(f"noise model misfit: {misfit}" for misfit in self.bayesian.misfits),
         )
-
-    @property
-    def passed(self) -> bool:
-        """Whether the posterior passed its sampler checks and its noise model fits."""
-        return not self.failures
-
-    def check(self) -> "TwoPositionCalibration":
-        """Raise :class:`~bayescal.HealthCheckError` when the posterior failed its checks.
-
-        Returns
-        -------
-        TwoPositionCalibration
-            This result, unchanged, when every check passed, so that the call chains
-            (``result = capability(...).check()``).
-
-        Raises
-        ------
-        HealthCheckError
-            A check failed; the message names each.
-        """
-        if not self.passed:
-            raise HealthCheckError(
-                "two-position: posterior checks failed: " + "; ".join(self.failures)
-            )
-        return self
 
 
 def calibrate_two_position(

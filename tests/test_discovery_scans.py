@@ -169,3 +169,19 @@ def test_a_line_in_a_withdrawn_sinusoids_family_is_a_periodic_waveform():
     assert entry["fundamental_hz"] == 0.010886 and "longer record" not in entry["advice"]
     apart = {"name": "spectral_line", "p_value": 1e-9, "location": {"frequency_hz": 0.0163}}
     assert _mismatch(apart, 100.0, duration, False, (), (0.010886,))["shape"] == "line"
+
+
+def test_where_a_located_mismatch_is_reads_as_words():
+    """The one-line place of a located mismatch: "a step at ..." but "switching levels at
+    ..." (a plural shape takes no article), with the stretch's two times."""
+    from bayescal.capabilities._discovery_unexplained import _located_band
+
+    def where(shape, time_s):
+        located = {"name": "level_scan", "location": {"shape": shape, "time_s": time_s}}
+        return _located_band([located], ["level_scan"], 50.0)
+
+    assert where("step", 189.373) == ("low", "a step at 189.373 s")
+    assert where("switching levels", [2150.4, 2478.08]) == (
+        "low",
+        "switching levels at 2150.4-2478.08 s",
+    )

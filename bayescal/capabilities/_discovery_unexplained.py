@@ -227,9 +227,9 @@ def _located_band(checks: list[dict], failing: list[str], rate_hz: float) -> tup
                 if isinstance(time_s, list)
                 else f"{time_s:.6g} s"
             )
-            return ("low" if name == "level_scan" else "noise"), (
-                f"a {located[name]['shape']} at {at}"
-            )
+            shape = located[name]["shape"]
+            article = "" if shape == "switching levels" else "a "
+            return ("low" if name == "level_scan" else "noise"), f"{article}{shape} at {at}"
     if "spectral_line" in located:
         return "line", f"a line at {located['spectral_line']['frequency_hz']:.6g} Hz"
     if set(located) == {"tails"}:

@@ -14,6 +14,7 @@ from _benchmarks import load_benchmark
 import bayescal as bc
 from bayescal._output import write_csv
 from bayescal.capabilities._examples import example_gyro_calibrations
+from bayescal.report._figures import infield_track_figure
 
 GYROS = ("gyro_x", "gyro_y", "gyro_z")
 PARK = {"latitude": 45.0, "heading": 30.0, "duration_s": 600.0, "rate_hz": 20.0}
@@ -412,6 +413,17 @@ def test_position_fixes_tell_the_heading_without_a_known_track(old, taxi_run):
     assert east["informed"]
     assert abs(east["mean"] - taxi.park_truth(park, TAXI_RATE)["east"]) < 3.3 * east["sd"]
     assert east["sd"] < 0.5 * east["prior_sd"]
+    # The report page's track figure draws the fixes the filter measured (one a second in the
+    # park and the taxi, less the first, which ties them to the track's start).
+    fixes = result.track["fixes"]
+    assert len(fixes["north"]) == len(fixes["east"]) > result.taxi["positions"]["fixes_in_taxi"]
+    figure = infield_track_figure(result.track, result.taxi)
+    drawn = [
+        line for line in figure.axes[0].get_lines() if line.get_label().startswith("position fixes")
+    ]
+    assert len(drawn) == 1
+    assert np.array_equal(drawn[0].get_xdata(), fixes["east"])
+    assert np.array_equal(drawn[0].get_ydata(), fixes["north"])
 
 
 def test_a_position_reference_that_cannot_be_used_is_refused(run_cli, old, taxi_run, tmp_path):
@@ -606,6 +618,7 @@ def test_the_report_page_of_a_park_and_taxi(run_cli, taxi_run, tmp_path):
     legs = np.asarray(track["leg"])
     assert [int(np.sum(legs == i)) for i in range(2)] == taxi["steps_on_legs"]
     assert np.all(legs[: track["park_steps"]] == -1)
+    assert track["fixes"] is None and "position fixes the filter measured" not in page
 
 
 def test_a_report_that_cannot_be_written_exits_2_and_writes_nothing(run_cli, files, tmp_path):

@@ -23,11 +23,13 @@ realised sqrt(mean MS updated / mean MS old) over the scenarios). It is the idea
 update's own filter model of the simulator (the flicker as a walk plus an offset, a 1 mm/s sway,
 the linearization about the computed track), which the realised errors test.
 
-Printed per gyro: the realised RMS ratio (s learned, s given), the ideal's, and the posterior's
-own; for the ideal, how it splits: the share of the north, east and down projections, each
-projection's posterior sd at 15, 30 and 45 degC against its prior's, and the ratio it would
-reach over the park's own temperatures only, with the east level (the heading) known exactly,
-with every slope or every curvature known exactly.
+Printed per gyro: the realised RMS ratio (s learned, s given), the ideal's, and the
+posterior's own; the learned s's quantiles (in the old sd of c0); with s learned and given,
+the east level's RMS error, sd and 90 % coverage and the coefficients' coverage; for the
+ideal, how it splits: the share of the north, east and down projections, each projection's
+posterior sd at 15, 30 and 45 degC against its prior's, and the ratio it would reach over the
+park's own temperatures only, with the east level (the heading) known exactly, with every
+slope or every curvature known exactly.
 """
 
 import argparse
@@ -36,7 +38,7 @@ import math
 import time
 
 import numpy as np
-from infield_taxi import GYROS, LEGS, RANGE, pair
+from infield_taxi import GYROS, LEGS, RANGE, pair, park_truth
 
 DEG_PER_HOUR = math.radians(1.0) / 3600.0  # rad/s per deg/h
 PER_HOUR = 1 / 3600.0  # deg/s per deg/h
@@ -139,7 +141,24 @@ def one_scenario(seed: int, options: dict) -> dict:
             np.array([np.mean(result.calibration[n].bias(RANGE)[1] ** 2) for n in GYROS])
             / PER_HOUR**2
         )
+        east = result.projections["east"]["level"]
+        truth = park_truth(park, options["rate"])["east"]
+        row[f"{label} east"] = (
+            east["mean"] - truth,
+            east["sd"],
+            float(east["q05"] <= truth <= east["q95"]),
+        )
+        covered = []
+        for name in GYROS:
+            true = np.asarray(park.truth["thermal"][name]["coefficients"])
+            low, high = np.quantile(result.coefficient_draws[name], [0.05, 0.95], axis=0)
+            covered.extend(((low <= true) & (true <= high)).tolist())
+        row[f"{label} coefficients covered"] = np.mean(covered)
         if label == "learned":
+            sd_c0 = math.sqrt(old["gyro_x"].covariance[0, 0])
+            row["drift quantiles"] = np.quantile(
+                np.degrees(result.posterior.drift) / sd_c0, [0.05, 0.5, 0.95]
+            )
             row["drift ratio"] = (
                 float(np.median(result.posterior.drift)) / math.radians(drift)
                 if drift > 0
@@ -210,7 +229,8 @@ def report(rows: list[dict]) -> None:
 
     old, prior = mean("old"), ideal("prior")
     seconds = np.mean([row["seconds"] for row in rows])
-    drift = np.nanmedian([row["drift ratio"] for row in rows])
+    learned = [row["drift ratio"] for row in rows if math.isfinite(row["drift ratio"])]
+    drift = f"{np.median(learned):.2f}" if learned else "n/a (not aged)"
     low, high = (np.mean([row["ideal"]["span"][i] for row in rows]) for i in (0, 1))
     print(f"== {len(rows)} scenarios; {seconds:.0f} s each (two updates); per gyro x, y, z")
     print(
@@ -224,8 +244,21 @@ def report(rows: list[dict]) -> None:
     print(
         "  the posterior's own RMS sd / old (s learned): "
         f"{ratios(np.sqrt(mean('learned predicted') / old))}; learned s / true s, median "
-        f"{drift:.2f}"
+        f"{drift}"
     )
+    quantiles = ", ".join(f"{q:.2f}" for q in np.median([r["drift quantiles"] for r in rows], 0))
+    print(
+        "  learned s in the old sd of c0: 5, 50, 95 % quantiles (median over scenarios) "
+        f"{quantiles}"
+    )
+    for label in ("learned", "given"):
+        error, sd, covered = np.array([row[f"{label} east"] for row in rows]).T
+        print(
+            f"  s {label}: east level RMS error {np.sqrt(np.mean(error**2)):.4f} deg/h, sd mean "
+            f"{np.mean(sd):.4f} deg/h, its 90 % intervals cover {100 * np.mean(covered):.0f} %; "
+            "coefficients' 90 % intervals cover "
+            f"{100 * mean(f'{label} coefficients covered'):.1f} %"
+        )
     print(f"  IDEAL (exact posterior at the true s, the Bayes risk): {ideal_ratio('posterior')}")
     print(
         f"    over the park's temperatures only ({low:.1f}-{high:.1f} degC): "

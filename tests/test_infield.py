@@ -383,6 +383,36 @@ def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_lev
         assert found[flight]["mahalanobis2"] < 13.8, (flight, found[flight])
 
 
+def test_the_ideal_is_the_update_at_the_true_aging_scale(old, taxi_run):
+    """benchmarks/infield_ideal.py's ideal, the exact Gaussian posterior of the nine coefficients
+    at a given aging scale s, is the update's own: with s given (the simulator's), each updated
+    coefficient's variance is the exact posterior's to within the 2000 draws' sampling error
+    (relative sd 3 %; 15 % allowed), and the ideal's mean square over 15-45 degC lies below the
+    prior's (the old calibration's expected error) for every gyro."""
+    ideal = load_benchmark("infield_ideal")
+    park, end, _ = taxi_run
+    drift = park.truth["thermal"]["gyro_x"]["aging_scale"]  # deg/s
+    with ideal.captured_alignment() as found:
+        result = bc.infield_update(
+            park.recording,
+            old,
+            latitude=45.0,
+            align=(0, 600),
+            taxi=(600, end),
+            track_heading="30,120",
+            drift=drift,
+            seed=5,
+        )
+    prior, posterior = ideal.exact_posterior(found, result.posterior.filtered, math.radians(drift))
+    for axis, name in enumerate(GYROS):
+        block = slice(3 * axis, 3 * axis + 3)
+        drawn = np.diag(result.calibration[name].covariance) * 3600.0**2  # (deg/h / degC^j)^2
+        np.testing.assert_allclose(drawn, np.diag(posterior[block, block]), rtol=0.15)
+    powers = (ideal.RANGE - 30.0)[:, None] ** np.arange(3)
+    weights = powers.T @ powers / ideal.RANGE.size
+    assert np.all(ideal.mean_square(posterior, weights) < ideal.mean_square(prior, weights))
+
+
 def test_position_fixes_tell_the_heading_without_a_known_track(old, taxi_run):
     """The taxi of the test above with no track heading but its GNSS fixes (2 m sd, white, once
     a second, ``positions=`` the latitude and longitude columns): the computed track drifts from

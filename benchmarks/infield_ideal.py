@@ -3,7 +3,7 @@ what no update can beat on benchmarks/infield_taxi.py's scenarios, and where the
 comes from.
 
     nice -n 10 python benchmarks/infield_ideal.py [--scenarios 8] [--rate 10] [--seed 0]
-        [--aging 4] [--park-s 1200] [--warmup 20:38.6] [--wander 0.2:20]
+        [--aging 4] [--park-s 1200] [--warmup 20:38.6] [--wander 0.2:20] [--drift-prior-scale K]
 
 Each scenario is benchmarks/infield_taxi.py's (navigation grade, a park of ``--park-s`` warming
 over ``--warmup``, aged by ``--aging`` times the calibration's sd of c0, a 10-minute known-track
@@ -29,7 +29,9 @@ the east level's RMS error, sd and 90 % coverage and the coefficients' coverage;
 ideal, how it splits: the share of the north, east and down projections, each projection's
 posterior sd at 15, 30 and 45 degC against its prior's, and the ratio it would reach over the
 park's own temperatures only, with the east level (the heading) known exactly, with every
-slope or every curvature known exactly.
+slope or every curvature known exactly. ``--drift-prior-scale K`` sets the scale of the learned
+s's half-Cauchy prior to K times the old sd of c0 (the library's is 10, DRIFT_PRIOR_SCALE):
+what that prior does to the not-aged east level's intervals, and to the aged case.
 """
 
 import argparse
@@ -95,7 +97,11 @@ def conditioned(covariance, functionals) -> np.ndarray:
 
 def one_scenario(seed: int, options: dict) -> dict:
     import bayescal as bc
+    from bayescal.capabilities import _infield
     from bayescal.capabilities._examples import example_gyro_calibrations
+
+    if options["drift_prior_scale"] is not None:
+        _infield.DRIFT_PRIOR_SCALE = options["drift_prior_scale"]
 
     old = example_gyro_calibrations()
     taxi = bc.Taxi(
@@ -285,12 +291,19 @@ def main() -> None:
     parser.add_argument("--park-s", type=float, default=1200.0, help="the park's length, s")
     parser.add_argument("--warmup", default="20:38.6", help="START:END degC over the park")
     parser.add_argument("--wander", default="0.2:20", help="SD:TAU, m and s")
+    parser.add_argument(
+        "--drift-prior-scale",
+        type=float,
+        help="the half-Cauchy prior's scale of the learned s, in the old sd of c0 (default: the "
+        "library's DRIFT_PRIOR_SCALE, 10)",
+    )
     args = parser.parse_args()
     options = {
         "rate": args.rate,
         "aging": args.aging,
         "park": {"duration_s": args.park_s, "warmup": pair(args.warmup, "--warmup")},
         "wander": pair(args.wander, "--wander"),
+        "drift_prior_scale": args.drift_prior_scale,
     }
     rows = []
     for seed in range(args.seed, args.seed + args.scenarios):

@@ -174,6 +174,7 @@ def one_scenario(seed: int, options: dict) -> dict:
         np.array([np.mean((old[n].bias(RANGE)[0] - park.gyro_bias(n, RANGE)) ** 2) for n in GYROS])
         / PER_HOUR**2
     )
+    # The last update's (s given): its filter run and alignment give the exact posterior.
     prior, posterior = exact_posterior(found, result.posterior.filtered, math.radians(drift))
     powers = (RANGE - 30.0)[:, None] ** np.arange(3)
     weights = powers.T @ powers / RANGE.size

@@ -34,7 +34,9 @@ and new); the horizontal position error after 1 h of free inertial navigation (p
 updated calibrations, the gyros at the park's mean temperature and at the taxi's end, and how
 often the posterior's predicted 90 % region (chi^2, 2 dof) holds the realised error.
 ``--park-s`` and ``--warmup`` change the park's length and its temperatures (start:end, degC):
-what the data must span for the updated calibration to hold over the calibrated range.
+what the data must span for the updated calibration to hold over the calibrated range
+(benchmarks/infield_ideal.py gives the least bias error any update can reach on these
+scenarios: the exact posterior at the true aging scale).
 ``--tactical``: gyros of ARW 0.05 deg/sqrt(h) and bias instability 0.05 deg/h, calibrated
 with 10 times the navigation grade's sds. ``--gnss SD``: the taxi also logs GNSS fixes of SD m
 (white, once a second; drawn after the rest, so the IMU's record is the same), and a fifth

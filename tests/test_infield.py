@@ -14,6 +14,7 @@ from _benchmarks import load_benchmark
 import bayescal as bc
 from bayescal._output import write_csv
 from bayescal.capabilities._examples import example_gyro_calibrations
+from bayescal.report._figures import infield_track_figure
 
 GYROS = ("gyro_x", "gyro_y", "gyro_z")
 PARK = {"latitude": 45.0, "heading": 30.0, "duration_s": 600.0, "rate_hz": 20.0}
@@ -382,6 +383,36 @@ def test_a_taxi_along_a_known_track_tells_the_heading_and_separates_the_east_lev
         assert found[flight]["mahalanobis2"] < 13.8, (flight, found[flight])
 
 
+def test_the_ideal_is_the_update_at_the_true_aging_scale(old, taxi_run):
+    """benchmarks/infield_ideal.py's ideal, the exact Gaussian posterior of the nine coefficients
+    at a given aging scale s, is the update's own: with s given (the simulator's), each updated
+    coefficient's variance is the exact posterior's to within the 2000 draws' sampling error
+    (relative sd 3 %; 15 % allowed), and the ideal's mean square over 15-45 degC lies below the
+    prior's (the old calibration's expected error) for every gyro."""
+    ideal = load_benchmark("infield_ideal")
+    park, end, _ = taxi_run
+    drift = park.truth["thermal"]["gyro_x"]["aging_scale"]  # deg/s
+    with ideal.captured_alignment() as found:
+        result = bc.infield_update(
+            park.recording,
+            old,
+            latitude=45.0,
+            align=(0, 600),
+            taxi=(600, end),
+            track_heading="30,120",
+            drift=drift,
+            seed=5,
+        )
+    prior, posterior = ideal.exact_posterior(found, result.posterior.filtered, math.radians(drift))
+    for axis, name in enumerate(GYROS):
+        block = slice(3 * axis, 3 * axis + 3)
+        drawn = np.diag(result.calibration[name].covariance) * 3600.0**2  # (deg/h / degC^j)^2
+        np.testing.assert_allclose(drawn, np.diag(posterior[block, block]), rtol=0.15)
+    powers = (ideal.RANGE - 30.0)[:, None] ** np.arange(3)
+    weights = powers.T @ powers / ideal.RANGE.size
+    assert np.all(ideal.mean_square(posterior, weights) < ideal.mean_square(prior, weights))
+
+
 def test_position_fixes_tell_the_heading_without_a_known_track(old, taxi_run):
     """The taxi of the test above with no track heading but its GNSS fixes (2 m sd, white, once
     a second, ``positions=`` the latitude and longitude columns): the computed track drifts from
@@ -412,6 +443,17 @@ def test_position_fixes_tell_the_heading_without_a_known_track(old, taxi_run):
     assert east["informed"]
     assert abs(east["mean"] - taxi.park_truth(park, TAXI_RATE)["east"]) < 3.3 * east["sd"]
     assert east["sd"] < 0.5 * east["prior_sd"]
+    # The report page's track figure draws the fixes the filter measured (one a second in the
+    # park and the taxi, less the first, which ties them to the track's start).
+    fixes = result.track["fixes"]
+    assert len(fixes["north"]) == len(fixes["east"]) > result.taxi["positions"]["fixes_in_taxi"]
+    figure = infield_track_figure(result.track, result.taxi)
+    drawn = [
+        line for line in figure.axes[0].get_lines() if line.get_label().startswith("position fixes")
+    ]
+    assert len(drawn) == 1
+    assert np.array_equal(drawn[0].get_xdata(), fixes["east"])
+    assert np.array_equal(drawn[0].get_ydata(), fixes["north"])
 
 
 def test_a_position_reference_that_cannot_be_used_is_refused(run_cli, old, taxi_run, tmp_path):
@@ -606,6 +648,7 @@ def test_the_report_page_of_a_park_and_taxi(run_cli, taxi_run, tmp_path):
     legs = np.asarray(track["leg"])
     assert [int(np.sum(legs == i)) for i in range(2)] == taxi["steps_on_legs"]
     assert np.all(legs[: track["park_steps"]] == -1)
+    assert track["fixes"] is None and "position fixes the filter measured" not in page
 
 
 def test_a_report_that_cannot_be_written_exits_2_and_writes_nothing(run_cli, files, tmp_path):

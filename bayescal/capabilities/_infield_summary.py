@@ -327,10 +327,21 @@ def computed_track(alignment) -> dict:
     (:func:`~bayescal.navigation._earth.north_east`; flat over the few km of a taxi); and the taxi
     leg each step lay on (an index into the track headings, -1 for the park's steps and those
     off the legs). The free-inertial track, not corrected by the filter: it carries the heading
-    error the taxi tells."""
+    error the taxi tells. With a position reference, ``fixes``: the fixes the filter measured
+    (``time_s``, ``north``, ``east``, m north and east of the first fix, which lies in the park
+    where the track starts: :func:`~bayescal.navigation._alignment.fine_alignment`); else
+    None."""
     trajectory = alignment.trajectory
     track = north_east(trajectory.latitude, trajectory.longitude, float(trajectory.height))
     legs = alignment.legs if alignment.legs is not None else np.full(track.shape[0], -1)
+    fixes = None
+    if alignment.fixes is not None:
+        measured = np.flatnonzero(np.isfinite(alignment.fixes).all(axis=1))
+        fixes = {
+            "time_s": alignment.times[measured],
+            "north": alignment.fixes[measured, 0],
+            "east": alignment.fixes[measured, 1],
+        }
     return {
         "time_s": alignment.times,
         "north": track[:, 0],
@@ -338,6 +349,7 @@ def computed_track(alignment) -> dict:
         "unit": "m",
         "leg": np.asarray(legs, dtype=int),
         "park_steps": int(alignment.park_steps),
+        "fixes": fixes,
     }
 
 

@@ -453,13 +453,27 @@ LEG_COLOURS = ("#3182bd", "#e6550d", "#31a354", "#756bb1", "#d6616b", "#8c6d31")
 def infield_track_figure(track: dict, taxi: dict | None):
     """The computed (free-inertial) track, east against north, m (``track``: the
     :attr:`~bayescal.InFieldUpdate.track`): the park's steps, the taxi's, the steps on each
-    known leg in that leg's colour, and each leg's known track heading drawn through its first
+    known leg in that leg's colour, each leg's known track heading drawn through its first
     and last step used (a computed track off that line carries the heading error the taxi
-    tells)."""
+    tells), and the position fixes the filter measured, where a position reference was given
+    (``track["fixes"]``: the computed track drifts from them by the heading error times the
+    distance run)."""
     north, east = np.asarray(track["north"]), np.asarray(track["east"])
     leg, park = np.asarray(track["leg"]), int(track["park_steps"])
     unit = pretty_unit(track["unit"])
     figure, (axes,) = new_figure(7.2, 5.0)
+    fixes = track.get("fixes")
+    if fixes is not None:
+        axes.plot(
+            np.asarray(fixes["east"]),
+            np.asarray(fixes["north"]),
+            "x",
+            color="#636363",
+            ms=3,
+            mew=0.6,
+            alpha=0.7,
+            label=f"position fixes ({len(fixes['north'])}; north and east of the first)",
+        )
     axes.plot(east[:park], north[:park], ".", color="0.3", ms=3, label="the park (still)")
     if taxi is not None:
         axes.plot(east[park:], north[park:], "-", color="0.65", lw=1, label="the taxi, computed")

@@ -351,7 +351,14 @@ def infield_page(update: InFieldUpdate, *, source: str) -> str:
         "<h2>The park and the taxi</h2>",
         "<p>The computed track (free-inertial, from the coarse alignment), north and east of "
         "the start; the steps the filter used on each known leg in colour, the leg's known "
-        "heading dashed through them.</p>",
+        "heading dashed through them"
+        + (
+            "; the position fixes the filter measured as crosses, north and east of the first"
+            " (the computed track drifts from them by the heading error times the distance run)"
+            if update.track.get("fixes") is not None
+            else ""
+        )
+        + ".</p>",
         embedded(infield_track_figure(update.track, update.taxi), "the computed track"),
         "<h2>The points before and after the heading correction</h2>",
         embedded(

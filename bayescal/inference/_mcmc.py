@@ -159,9 +159,13 @@ def sample_ensemble(
         state = sampler.run_mcmc(state, steps)
         if bar is not None:
             bar.update(steps)
-        longer = long_enough(sampler.get_autocorr_time(tol=0), sampler.iteration)
-        if longer and longer_before:
-            converged = True
+        tau = sampler.get_autocorr_time(tol=0)
+        longer = long_enough(tau, sampler.iteration)
+        converged = longer and longer_before
+        # Long enough, but R-hat or the ESS short of its bar: a borderline run, which more
+        # steps settle (an R-hat of 1.017 turned 1.01 by a chain that differed only in its
+        # rounding), runs on rather than failing its checks.
+        if converged and _mixed(sampler, tau):
             break
         longer_before = longer
         chunk = max(chunk, int(sampler.iteration // 4))
@@ -239,20 +243,44 @@ def _restart(sampler, rng) -> np.ndarray:
     return mean + rng.standard_normal((sampler.nwalkers, sampler.ndim)) @ spread.T
 
 
+def _after_burn_in(sampler, tau) -> tuple[int, np.ndarray]:
+    """The burn-in (twice the longest autocorrelation time, at most half the run) and the
+    chain after it, (walkers, steps, dim)."""
+    burn_in = math.ceil(2 * np.max(tau)) if np.all(np.isfinite(tau)) else sampler.iteration // 2
+    burn_in = min(burn_in, sampler.iteration // 2)
+    return burn_in, np.moveaxis(sampler.get_chain(discard=burn_in), 0, 1)
+
+
+def _ess_rhat(by_walker) -> tuple[np.ndarray, np.ndarray]:
+    """Bulk ESS over the walkers and R-hat across RHAT_GROUPS groups of them, per
+    parameter, of a chain (walkers, steps, dim)."""
+    groups = by_walker.reshape(RHAT_GROUPS, -1, by_walker.shape[2])
+    ess = [
+        array_stats.ess(by_walker[..., i], chain_axis=0, draw_axis=1)
+        for i in range(groups.shape[2])
+    ]
+    rhat = [
+        array_stats.rhat(groups[..., i], chain_axis=0, draw_axis=1) for i in range(groups.shape[2])
+    ]
+    return np.asarray(ess, dtype=float), np.asarray(rhat, dtype=float)
+
+
+def _mixed(sampler, tau) -> bool:
+    """Whether the run's bulk ESS and R-hat pass their checks (:func:`diagnose`)."""
+    ess, rhat = _ess_rhat(_after_burn_in(sampler, tau)[1])
+    return bool(np.all(ess >= MIN_ESS) and np.all(rhat <= MAX_RHAT))
+
+
 def diagnose(sampler, names, converged: bool, map_converged: bool):
     """The health checks of an emcee run, and the draws kept from it, (walkers, draws, dim):
     the same number for every run, so that functions of them compile once."""
     tau = sampler.get_autocorr_time(tol=0)
-    burn_in = math.ceil(2 * np.max(tau)) if np.all(np.isfinite(tau)) else sampler.iteration // 2
-    burn_in = min(burn_in, sampler.iteration // 2)
-    by_walker = np.moveaxis(sampler.get_chain(discard=burn_in), 0, 1)
+    burn_in, by_walker = _after_burn_in(sampler, tau)
     steps = by_walker.shape[1]
     kept = np.unique(np.linspace(0, steps - 1, MAX_STORED_DRAWS // by_walker.shape[0]).round())
-    groups = by_walker.reshape(RHAT_GROUPS, -1, by_walker.shape[2])
-    ess, rhat = {}, {}
-    for i, name in enumerate(names):
-        ess[name] = float(array_stats.ess(by_walker[..., i], chain_axis=0, draw_axis=1))
-        rhat[name] = float(array_stats.rhat(groups[..., i], chain_axis=0, draw_axis=1))
+    ess_of, rhat_of = _ess_rhat(by_walker)
+    ess = {name: float(ess_of[i]) for i, name in enumerate(names)}
+    rhat = {name: float(rhat_of[i]) for i, name in enumerate(names)}
     acceptance = sampler.acceptance_fraction
     failures = []
     if not converged:

@@ -135,34 +135,47 @@ class TermSelection:
 
 class _Families:
     """The models of a record's term search, each fitted once: one compiled problem per
-    output-filter family, a mask per model."""
+    family (the output filter's shape, and whether it holds a grid term), a mask per model."""
 
     def __init__(self, spectral, level, prior_of, lsb: float):
         self.spectral, self.level = spectral, level
         self.prior_of, self.lsb = prior_of, lsb
-        self.problems: dict[str, NoiseProblem] = {}
+        self.problems: dict[tuple[str, ...], NoiseProblem] = {}
         self.evidence: dict[frozenset, float] = {}
         self.fits: dict[frozenset, tuple[NoiseProblem, Mode]] = {}
+        components = spectral.components
+        self.grids = {
+            t.name for t, n in zip(components.terms, components.counts, strict=True) if n > 1
+        }
 
     def _family(self, terms) -> tuple[str, ...]:
-        """Every candidate's term, with the output filter of ``terms`` (one-tap by default)."""
+        """Every candidate's term, with the output filter of ``terms`` (one-tap by default),
+        less the grid terms (the Gauss-Markov term's correlation times: 52 of 57 components
+        at 2^20 samples) ``terms`` does not hold: they weigh zero in its models, and without
+        them a solve costs a fraction and its trace does not depend on the record's
+        duration."""
         filters = [t for t in terms if t in FILTER_SHAPE_OF_TERM] or ["output_filter"]
-        return ("white", *(t for t in CANDIDATE_TERMS if t not in FILTER_SHAPE_OF_TERM), *filters)
+        kept = (
+            t
+            for t in CANDIDATE_TERMS
+            if t not in FILTER_SHAPE_OF_TERM and (t in terms or t not in self.grids)
+        )
+        return ("white", *kept, *filters)
 
     def _problem(self, terms: frozenset) -> NoiseProblem:
-        """The problem of the family of ``terms`` (made at its first model)."""
+        """The problem of the family of ``terms`` (made at its first model), its summaries
+        holding the family's components only (:meth:`NoiseProblem.of_own_terms`)."""
         family = self._family(terms)
-        key = family[-1]
-        if key not in self.problems:
+        if family not in self.problems:
             prior = self.prior_of(family)
-            self.problems[key] = NoiseProblem(
+            self.problems[family] = NoiseProblem(
                 self.spectral,
                 self.level,
                 prior,
                 lsb=np.asarray(self.lsb),
                 mask=np.ones(len(prior.parameters)),
-            )
-        return self.problems[key]
+            ).of_own_terms()
+        return self.problems[family]
 
     def log_evidence(self, terms: frozenset) -> float:
         if terms not in self.evidence:

@@ -205,12 +205,15 @@ class NoiseProblem(eqx.Module):
         its few components, not of a term search's family of some sixty (the Gauss-Markov
         term's grid of correlation times among them).
 
-        What the posterior's bias draws take (:func:`~bayescal.inference._noise_posterior.
-        noise_posterior_of`: 2,000 block-mean covariances built from two components, not
-        sixty). Not the sampler: the same log density to rounding is a different chain, within
-        Monte Carlo error, and a borderline posterior's checks then pass or fail otherwise for
-        the same seed (a biquad's R-hat 1.017 against 1.01 in tests/test_high_frequency.py),
-        so the terms of a seed would change."""
+        What the posterior's MAP, chain, draws and bias take
+        (:func:`~bayescal.inference._noise_posterior.sample_noise`: a log density of two
+        components, not sixty, at each of the sampler's steps; 2,000 block-mean covariances
+        of two components for the bias) and each family of the term search
+        (:mod:`~bayescal.inference._selection`: the Gauss-Markov grid only where a model holds
+        the term). The same log density to rounding is another chain, within Monte Carlo
+        error: a borderline posterior that met its autocorrelation criterion with an R-hat or
+        ESS short of the bar runs on until they pass (:func:`~bayescal.inference._mcmc.
+        sample_ensemble`) rather than failing for one seed and passing for another."""
         components, rows = self.components.restricted(self.terms)
         if len(rows) == len(self.components.shapes):
             return self

@@ -4,7 +4,10 @@ Any model with a batched log-posterior uses :func:`sample_ensemble` and :func:`d
 walkers start from the Laplace approximation at the MAP, move by differential evolution
 (ter Braak 2006; on a fleet's 3-D bias population its autocorrelation times were 13-33
 steps against the stretch move's 39-53), and run until the chain is longer than
-AUTOCORR_MULTIPLE autocorrelation times by the estimates at two successive checks. The checks
+AUTOCORR_MULTIPLE autocorrelation times by the estimates at two successive checks and its
+R-hat and bulk ESS pass: a run long enough by its autocorrelation whose R-hat or ESS is short
+of the bar is borderline, and runs on (to the step limit at most) rather than failing. The
+checks come after FIRST_CHUNK steps, then after each eighth of the run so far. The checks
 (Vehtari et al. 2021 for R-hat and ESS; emcee's guidance for the rest): that criterion, bulk
 ESS >= MIN_ESS for every parameter, R-hat <= MAX_RHAT across RHAT_GROUPS groups of walkers,
 mean acceptance within ACCEPTANCE_RANGE, and a converged MAP.
@@ -44,7 +47,10 @@ STRAGGLER_LOG_DENSITY = 20.0
 """A walker whose log density stays this far (plus the ensemble's own spread) below the
 median is stuck away from the posterior."""
 FIRST_CHUNK = 250
-"""Steps before the first convergence check; later checks after a quarter of the run so far."""
+"""Steps before the first convergence check (:func:`sample_ensemble`)."""
+CHECK_SHARE = 8
+"""A single run's later checks come after this share (1/8) of the run so far, and at least
+half the first chunk apart: a run stops at most an eighth past where it met its criterion."""
 
 
 class Diagnostics(eqx.Module):
@@ -130,7 +136,9 @@ def sample_ensemble(
     max_steps: int,
     progress: bool = False,
 ):
-    """Run emcee from the Laplace approximation N(start, covariance) until converged.
+    """Run emcee from the Laplace approximation N(start, covariance) until converged (the
+    autocorrelation criterion at two successive checks, R-hat and bulk ESS passing: module
+    docstring) or ``max_steps``.
 
     ``log_posterior_batch`` maps a (walkers, dimension) array to (walkers,) numpy log
     densities (see :func:`batch_log_density`).
@@ -168,7 +176,7 @@ def sample_ensemble(
         if converged and _mixed(sampler, tau):
             break
         longer_before = longer
-        chunk = max(chunk, int(sampler.iteration // 4))
+        chunk = max(FIRST_CHUNK // 2, sampler.iteration // CHECK_SHARE)
         if sampler.iteration >= judge_after and _stuck(sampler):
             if restarts == MAX_RESTARTS:
                 break  # still stuck after the last restart: it would not explore

@@ -149,33 +149,29 @@ class _Families:
         }
 
     def _family(self, terms) -> tuple[str, ...]:
-        """Every candidate's term, with the output filter of ``terms`` (one-tap by default),
-        less the grid terms (the Gauss-Markov term's correlation times: 52 of 57 components
-        at 2^20 samples) ``terms`` does not hold: they weigh zero in its models, and without
-        them a solve costs a fraction and its trace does not depend on the record's
-        duration."""
+        """Every candidate's term, with the output filter of ``terms`` (one-tap by default)."""
         filters = [t for t in terms if t in FILTER_SHAPE_OF_TERM] or ["output_filter"]
-        kept = (
-            t
-            for t in CANDIDATE_TERMS
-            if t not in FILTER_SHAPE_OF_TERM and (t in terms or t not in self.grids)
-        )
-        return ("white", *kept, *filters)
+        return ("white", *(t for t in CANDIDATE_TERMS if t not in FILTER_SHAPE_OF_TERM), *filters)
 
     def _problem(self, terms: frozenset) -> NoiseProblem:
-        """The problem of the family of ``terms`` (made at its first model), its summaries
-        holding the family's components only (:meth:`NoiseProblem.of_own_terms`)."""
+        """The problem of the family of ``terms`` (made at its first model). Its summaries
+        leave out the components of the grid terms ``terms`` does not hold (the Gauss-Markov
+        term's correlation times: 52 of 57 components at 2^20 samples), which weigh zero in
+        its models (:meth:`NoiseProblem.of_own_terms`): a solve then costs a fraction, and
+        its trace does not depend on the record's duration. Their parameters stay, masked,
+        so that the optimiser takes the same path."""
         family = self._family(terms)
-        if family not in self.problems:
+        summarised = tuple(t for t in family if t in terms or t not in self.grids)
+        if summarised not in self.problems:
             prior = self.prior_of(family)
-            self.problems[family] = NoiseProblem(
+            self.problems[summarised] = NoiseProblem(
                 self.spectral,
                 self.level,
                 prior,
                 lsb=np.asarray(self.lsb),
                 mask=np.ones(len(prior.parameters)),
-            ).of_own_terms()
-        return self.problems[family]
+            ).of_own_terms(summarised)
+        return self.problems[summarised]
 
     def log_evidence(self, terms: frozenset) -> float:
         if terms not in self.evidence:

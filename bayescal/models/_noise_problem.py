@@ -198,12 +198,13 @@ class NoiseProblem(eqx.Module):
             padded_summary(self.spectral), None, self.prior, lsb=self.lsb, mask=self.mask
         )
 
-    def of_own_terms(self) -> "NoiseProblem":
+    def of_own_terms(self, terms=None) -> "NoiseProblem":
         """This problem with its summaries holding only the components of its own terms
-        (:meth:`~bayescal.models._components.Components.restricted`): the same log density
-        and bias, every other component of the family weighing zero in them, at the cost of
-        its few components, not of a term search's family of some sixty (the Gauss-Markov
-        term's grid of correlation times among them).
+        (:meth:`~bayescal.models._components.Components.restricted`), or of ``terms``: the
+        same log density and bias where every other component of the family weighs zero (a
+        term the problem lacks, or one it holds that ``terms`` leaves out and its mask
+        switches off), at the cost of its few components, not of a term search's family of
+        some sixty (the Gauss-Markov term's grid of correlation times among them).
 
         What the posterior's MAP, chain, draws and bias take
         (:func:`~bayescal.inference._noise_posterior.sample_noise`: a log density of two
@@ -214,7 +215,7 @@ class NoiseProblem(eqx.Module):
         error: a borderline posterior that met its autocorrelation criterion with an R-hat or
         ESS short of the bar runs on until they pass (:func:`~bayescal.inference._mcmc.
         sample_ensemble`) rather than failing for one seed and passing for another."""
-        components, rows = self.components.restricted(self.terms)
+        components, rows = self.components.restricted(self.terms if terms is None else terms)
         if len(rows) == len(self.components.shapes):
             return self
         spectral = self.spectral

@@ -170,9 +170,9 @@ def sample_ensemble(
         tau = sampler.get_autocorr_time(tol=0)
         longer = long_enough(tau, sampler.iteration)
         converged = longer and longer_before
-        # Long enough, but R-hat or the ESS short of its bar: a borderline run, which more
-        # steps settle (an R-hat of 1.017 turned 1.01 by a chain that differed only in its
-        # rounding), runs on rather than failing its checks.
+        # Long enough, but R-hat or the ESS short of its bar: a borderline run (a biquad's
+        # R-hat 1.017 against 1.01, on a chain that differed from a passing one only in its
+        # rounding) runs on, for more steps settle it, rather than failing its checks.
         if converged and _mixed(sampler, tau):
             break
         longer_before = longer

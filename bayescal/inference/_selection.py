@@ -35,7 +35,9 @@ Cost: every model of a family shares one compiled optimiser. A family is a
 a model is a mask switching some off (a masked noise scale is zero, a masked filter passes
 everything). A masked coordinate's posterior is its normal prior, whose normalised density and
 Hessian cancel exactly in the Laplace evidence, so the evidence of a masked model is that of
-the model without those coordinates.
+the model without those coordinates. A family whose models lack a grid term (the Gauss-Markov
+term's correlation times, most of the components) leaves the grid out of its summaries and
+keeps its parameters, masked: the same log density, at the cost of its few components.
 """
 
 import dataclasses

@@ -19,8 +19,11 @@ Each process times, after its imports, the peer (``_common.allan_wls_fit``: alla
 overlapping Allan deviation at octave taus and the weighted least-squares fit of N, B, K),
 then ``--calls`` calls of ``fit_noise``: the first call of a process, then later calls on the
 same record. The peer is timed again after the last call: the machine is shared, so read the
-ratios to the peer of the same process. Targets (issue 38): first call in a fresh process
-with a warm cache <= 5 s at 2^20; later calls <= 1 s at 2^20 and <= the peer at 2^23.
+ratios to the peer of the same process, and the CPU time (all threads) each call took beside
+its wall time, with the last call's stages (those of ``bayescal noise --profile``): on a
+machine shared with other jobs, the CPU time moves less with the load than the wall time.
+Targets (issue 38): first call in a fresh process with a warm cache <= 5 s at 2^20; later
+calls <= 1 s at 2^20 and <= the peer at 2^23.
 
 It prints JAX's default backend and devices (a GPU is used where JAX finds one) and the load
 average; ``--json PATH`` writes every process's timings there too (after each process, so
@@ -47,23 +50,30 @@ def child(samples: int, calls: int) -> dict:
     from _common import allan_wls_fit
 
     import bayescal as bc
+    from bayescal._stages import timing
 
     bc.fit_noise  # noqa: B018  (bayescal's names load on first use: an import, excluded)
     values = bc.NoiseModel(rate_hz=RATE, bias=0.3, **TRUTH).simulate(samples, seed=1)
     start = time.perf_counter()
     allan_wls_fit(values, RATE)
     peer = [time.perf_counter() - start]
-    times, fit = [], None
+    times, cpu, stages, fit = [], [], [], None
     for _ in range(calls):
-        start = time.perf_counter()
-        fit = bc.fit_noise(values, rate_hz=RATE, seed=1)
-        times.append(time.perf_counter() - start)
+        with timing() as stage_times:
+            start, start_cpu = time.perf_counter(), time.process_time()
+            fit = bc.fit_noise(values, rate_hz=RATE, seed=1)
+            times.append(time.perf_counter() - start)
+            cpu.append(time.process_time() - start_cpu)
+        stages.append({name.split(" (")[0]: s for name, depth, s in stage_times if depth == 0})
     start = time.perf_counter()
     allan_wls_fit(values, RATE)
     peer.append(time.perf_counter() - start)
     return {
         "peer_s": peer,
         "fit_s": times,
+        "fit_cpu_s": cpu,
+        "stages_s": stages,
+        "steps": fit.diagnostics.n_steps,
         "terms": list(fit.terms),
         "passed": bool(fit.passed),
         "N": fit.parameters["N"].mean,
@@ -121,6 +131,12 @@ def main() -> None:
                     f" s; terms {'+'.join(result['terms'])}, checks "
                     f"{'passed' if result['passed'] else 'FAILED'}, N {result['N']:.5f}; "
                     f"load {os.getloadavg()[0]:.1f}",
+                    flush=True,
+                )
+                print(
+                    f"    CPU (all threads) {', '.join(f'{t:.2f}' for t in result['fit_cpu_s'])}"
+                    f" s; emcee {result['steps']} steps; the last call's stages: "
+                    + ", ".join(f"{k} {v:.2f}" for k, v in result["stages_s"][-1].items()),
                     flush=True,
                 )
                 if args.json is not None:

@@ -4,6 +4,7 @@ that distribution's variances (the check that caught emcee's snooker move, whose
 
 import numpy as np
 
+from bayescal.inference import _mcmc
 from bayescal.inference._mcmc import diagnose, sample_ensemble
 
 COVARIANCE = np.array(
@@ -70,3 +71,25 @@ def test_a_healthy_run_is_never_restarted():
     )
     diagnostics, _ = diagnose(sampler, tuple("abcd"), converged, True)
     assert converged and diagnostics.passed and diagnostics.restarts == 0
+
+
+def test_a_run_long_enough_but_short_of_its_r_hat_runs_on(monkeypatch):
+    """Where the autocorrelation criterion is met but R-hat or the ESS is short of its bar
+    (made so here at the first such check), the run goes on, a check at a time, and stops
+    once they pass: a borderline chain is run longer, not reported failed."""
+    checked = []
+    mixed = _mcmc._mixed
+
+    def short_at_first(sampler, tau):
+        checked.append(sampler.iteration)
+        return len(checked) > 1 and mixed(sampler, tau)
+
+    monkeypatch.setattr(_mcmc, "_mixed", short_at_first)
+    sampler, converged = sample_ensemble(
+        gaussian_log_density, np.zeros(4), COVARIANCE, np.random.default_rng(1), 32, 40_000
+    )
+    diagnostics, _ = diagnose(sampler, ("a", "b", "c", "d"), converged, True)
+    assert converged and len(checked) >= 2 and diagnostics.passed, diagnostics.failures
+    assert sampler.iteration == checked[-1] > checked[0]
+    # Each check after an eighth of the run so far, at least half the first chunk.
+    assert checked[1] - checked[0] == max(_mcmc.FIRST_CHUNK // 2, checked[0] // 8)

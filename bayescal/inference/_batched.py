@@ -202,6 +202,9 @@ def sample_noise_each(
         longer_before = longer
         if converged.all():
             break
+        # After each quarter of the run so far, on the autocorrelation criterion alone: a
+        # record failing its checks here is sampled alone (``sample_ensemble``, its checks
+        # each eighth, R-hat and ESS gating its stop).
         chunk = max(chunk, sampler.iteration // 4)
     posteriors = []
     for g, problem in enumerate(problems):

@@ -18,9 +18,10 @@ class Sampler:
     :func:`~bayescal.discover`, :func:`~bayescal.fit_fleet`).
 
     Walkers start from the Laplace approximation at the MAP and move by differential evolution
-    until the chain is longer than 50 autocorrelation times at two successive checks; the
-    posterior then passes its checks (R-hat, bulk ESS, acceptance) or the result says which it
-    failed (:mod:`bayescal.inference._mcmc`).
+    until the chain is longer than 50 autocorrelation times at two successive checks and its
+    R-hat and bulk ESS pass (a borderline run runs on); the posterior then passes its checks
+    (R-hat, bulk ESS, acceptance) or the result says which it failed
+    (:mod:`bayescal.inference._mcmc`).
 
     The seed is not a setting of the sampler: it stays a keyword of each call (``seed=``),
     since it also seeds what is drawn outside emcee (discovery's imputation of clipped
@@ -34,7 +35,7 @@ class Sampler:
         dimension plus two, rounded up to a multiple of the 4 groups R-hat compares).
     max_steps : int
         The most steps before sampling stops; a chain that has not met the autocorrelation
-        criterion by then fails its checks.
+        criterion, or whose R-hat or ESS is still short of its bar, by then fails its checks.
     progress : bool
         A progress bar on stderr.
 

@@ -198,20 +198,24 @@ class NoiseProblem(eqx.Module):
             padded_summary(self.spectral), None, self.prior, lsb=self.lsb, mask=self.mask
         )
 
-    def of_own_terms(self) -> "NoiseProblem":
+    def of_own_terms(self, terms=None) -> "NoiseProblem":
         """This problem with its summaries holding only the components of its own terms
-        (:meth:`~bayescal.models._components.Components.restricted`): the same log density
-        and bias, every other component of the family weighing zero in them, at the cost of
-        its few components, not of a term search's family of some sixty (the Gauss-Markov
-        term's grid of correlation times among them).
+        (:meth:`~bayescal.models._components.Components.restricted`), or of ``terms``: the
+        same log density and bias where every other component of the family weighs zero (a
+        term the problem lacks, or one it holds that ``terms`` leaves out and its mask
+        switches off), at the cost of its few components, not of a term search's family of
+        some sixty (the Gauss-Markov term's grid of correlation times among them).
 
-        What the posterior's bias draws take (:func:`~bayescal.inference._noise_posterior.
-        noise_posterior_of`: 2,000 block-mean covariances built from two components, not
-        sixty). Not the sampler: the same log density to rounding is a different chain, within
-        Monte Carlo error, and a borderline posterior's checks then pass or fail otherwise for
-        the same seed (a biquad's R-hat 1.017 against 1.01 in tests/test_high_frequency.py),
-        so the terms of a seed would change."""
-        components, rows = self.components.restricted(self.terms)
+        What the posterior's MAP, chain, draws and bias take
+        (:func:`~bayescal.inference._noise_posterior.sample_noise`: a log density of two
+        components, not sixty, at each of the sampler's steps; 2,000 block-mean covariances
+        of two components for the bias) and each family of the term search
+        (:mod:`~bayescal.inference._selection`: the Gauss-Markov grid only where a model holds
+        the term). The same log density to rounding is another chain, within Monte Carlo
+        error: a borderline posterior that met its autocorrelation criterion with an R-hat or
+        ESS short of the bar runs on until they pass (:func:`~bayescal.inference._mcmc.
+        sample_ensemble`) rather than failing for one seed and passing for another."""
+        components, rows = self.components.restricted(self.terms if terms is None else terms)
         if len(rows) == len(self.components.shapes):
             return self
         spectral = self.spectral

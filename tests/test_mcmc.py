@@ -93,3 +93,22 @@ def test_a_run_long_enough_but_short_of_its_r_hat_runs_on(monkeypatch):
     assert sampler.iteration == checked[-1] > checked[0]
     # Each check after an eighth of the run so far, at least half the first chunk.
     assert checked[1] - checked[0] == max(_mcmc.FIRST_CHUNK // 2, checked[0] // 8)
+
+
+def test_a_run_that_never_mixes_runs_on_a_bounded_stretch_then_fails(monkeypatch):
+    """A run long enough by its autocorrelation whose R-hat or ESS never passes (made so
+    here) runs on to RUN_ON times the length where the criterion was first met — not to the
+    step limit — and stops there, its checks left to fail."""
+    checked = []
+
+    def never(sampler, tau):
+        checked.append(sampler.iteration)
+        return False
+
+    monkeypatch.setattr(_mcmc, "_mixed", never)
+    sampler, converged = sample_ensemble(
+        gaussian_log_density, np.zeros(4), COVARIANCE, np.random.default_rng(1), 32, 40_000
+    )
+    assert converged
+    assert _mcmc.RUN_ON * checked[0] <= sampler.iteration < _mcmc.RUN_ON * checked[0] * 1.2
+    assert sampler.iteration < 40_000 // 4

@@ -6,7 +6,9 @@ walkers start from the Laplace approximation at the MAP, move by differential ev
 steps against the stretch move's 39-53), and run until the chain is longer than
 AUTOCORR_MULTIPLE autocorrelation times by the estimates at two successive checks and its
 R-hat and bulk ESS pass: a run long enough by its autocorrelation whose R-hat or ESS is short
-of the bar is borderline, and runs on (to the step limit at most) rather than failing. The
+of the bar is borderline, and runs on rather than failing, to RUN_ON times the length at which
+it was first long enough (or the step limit): a run that has not mixed by then fails its
+checks, at a bounded cost, instead of spending the whole step limit. The
 checks come after FIRST_CHUNK steps, then after each eighth of the run so far. The checks
 (Vehtari et al. 2021 for R-hat and ESS; emcee's guidance for the rest): that criterion, bulk
 ESS >= MIN_ESS for every parameter, R-hat <= MAX_RHAT across RHAT_GROUPS groups of walkers,
@@ -48,6 +50,9 @@ STRAGGLER_LOG_DENSITY = 20.0
 median is stuck away from the posterior."""
 FIRST_CHUNK = 250
 """Steps before the first convergence check (:func:`sample_ensemble`)."""
+RUN_ON = 4
+"""A run long enough by its autocorrelation but short of its R-hat or ESS runs on to at most
+this many times the length at which it was first long enough (:func:`sample_ensemble`)."""
 CHECK_SHARE = 8
 """A single run's later checks come after this share (1/8) of the run so far, and at least
 half the first chunk apart: a run stops at most an eighth past where it met its criterion."""
@@ -160,6 +165,7 @@ def sample_ensemble(
             total=max_steps, desc="posterior (emcee)", unit="step", leave=False, file=sys.stderr
         )
     longer_before, converged, chunk = False, False, FIRST_CHUNK
+    converged_at = None
     restarts, used = 0, 0
     judge_after = max(RESTART_AFTER[0], int(RESTART_AFTER[1] * max_steps))
     while used + sampler.iteration < max_steps:
@@ -173,8 +179,10 @@ def sample_ensemble(
         # Long enough, but R-hat or the ESS short of its bar: a borderline run (a biquad's
         # R-hat 1.017 against 1.01, on a chain that differed from a passing one only in its
         # rounding) runs on, for more steps settle it, rather than failing its checks.
-        if converged and _mixed(sampler, tau):
-            break
+        if converged:
+            converged_at = converged_at or sampler.iteration
+            if _mixed(sampler, tau) or sampler.iteration >= RUN_ON * converged_at:
+                break
         longer_before = longer
         chunk = max(FIRST_CHUNK // 2, sampler.iteration // CHECK_SHARE)
         if sampler.iteration >= judge_after and _stuck(sampler):
@@ -184,7 +192,7 @@ def sample_ensemble(
             used += sampler.iteration
             state = _restart(sampler, rng)
             sampler = ensemble(log_posterior_batch, n_walkers, dimension, rng)
-            longer_before, chunk = False, FIRST_CHUNK
+            longer_before, chunk, converged_at = False, FIRST_CHUNK, None
     if bar is not None:
         bar.close()
     sampler.restarts = restarts  # read by diagnose()

@@ -50,7 +50,7 @@ STRAGGLER_LOG_DENSITY = 20.0
 median is stuck away from the posterior."""
 FIRST_CHUNK = 250
 """Steps before the first convergence check (:func:`sample_ensemble`)."""
-RUN_ON = 4
+RUN_ON = 10
 """A run long enough by its autocorrelation but short of its R-hat or ESS runs on to at most
 this many times the length at which it was first long enough (:func:`sample_ensemble`)."""
 CHECK_SHARE = 8

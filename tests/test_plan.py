@@ -20,13 +20,18 @@ def pilot():
 
 
 def test_the_prediction_at_the_pilots_length_is_its_posterior(pilot):
-    """N's and K's predicted 90 % half-widths at the pilot's 14 minutes agree with the pilot
-    posterior's own within 15 % (measured: within 3 %), and the predicted widths fall as the
-    record grows."""
+    """The predicted 90 % half-widths at the pilot's 14 minutes are the pilot posterior's own:
+    N's within 5 %; K's, which 14 minutes identify weakly (its half-width 36 %), within 25 %.
+    Measured with 256 draws instead of 16, so that the draws' own noise (+-4 % with 16) is
+    out: N 0.0133 against 0.0133; K 0.400-0.406 against 0.356-0.358, the prediction some 14 %
+    wide, the same before and after the sampler's changes of 2026-11-27 (the median over
+    draws of the expected curvature where the likelihood is far from Gaussian); the study
+    against realised widths (benchmarks/plan_validation.py) holds K within +-20 % where the
+    pilot read K well. The predicted widths fall as the record grows."""
     plan = bc.plan_recording(pilot, {"K": 0.1}, length_s=4 * 3600)
-    for name in ("N", "K"):
+    for name, within in (("N", 0.05), ("K", 0.25)):
         term = plan.terms[name]
-        assert term.width_now == pytest.approx(term.width_measured, rel=0.15), name
+        assert term.width_now == pytest.approx(term.width_measured, rel=within), name
         assert np.all(np.diff(plan.curve.widths[name]) < 0)
         assert plan.at_length[name] < term.width_now
     assert plan.terms["K"].length_s > plan.duration_s

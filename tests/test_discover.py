@@ -368,3 +368,23 @@ def test_a_random_walk_beside_a_gauss_markov_term_is_found_with_its_time_constan
     assert sorted(named(found)) == ["gauss_markov", "rate_random_walk"]
     (markov,) = [f.effect for f in found.result.findings if f.name == "gauss_markov"]
     assert tau / 2 < markov.time_constant_s < 2 * tau
+
+
+def test_a_sinusoid_at_a_harmonic_of_the_line_left_is_not_apart_from_it():
+    """A sinusoid fitted at 0.0218 Hz, twice a sawtooth's fundamental of 0.0109 Hz left
+    failing in a 1085 s record (discovery_unknowns' sawtooth seed 5): the two are lines of one
+    periodic waveform, so the sinusoid did not explain its own line (not apart) — either way
+    round, as a line left at its second harmonic is not. A 5 Hz sinusoid beside that line
+    (its 459th multiple within 5 resolutions) is apart: beyond the 10th harmonic a whole
+    multiple is chance; and so is a 2 Hz one beside a line at 1.37 Hz."""
+    from bayescal.models.effects.sinusoid import Sinusoid
+
+    def line_at(frequency):
+        return {"location": {"frequency_hz": frequency}}
+
+    duration = 1085.0
+    assert not Sinusoid(2 * 0.0109).apart(line_at(0.0109), duration)
+    assert not Sinusoid(0.0109).apart(line_at(2 * 0.0109), duration)
+    assert Sinusoid(5.0).apart(line_at(0.0109), duration)
+    assert Sinusoid(2.0).apart(line_at(1.37), duration)
+    assert Sinusoid(1.37).apart(line_at(2.0), duration)

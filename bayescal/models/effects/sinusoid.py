@@ -12,6 +12,12 @@ MAX_COUNT = 2
 SAME_LINE_BINS = 5.0
 """A line within this many Fourier resolutions of a fitted one (or of its harmonic) is
 taken for it."""
+MAX_HARMONIC = 10
+"""The highest multiple of a line taken for its harmonic. A periodic waveform's power lies in
+its first harmonics (a sawtooth's k-th has 1/k of the fundamental's amplitude); and whole
+multiples of a slow line lie so close that any frequency is near one (of a 0.0109 Hz line
+over 1085 s, within the 5 resolutions taken for one line, 85 % of all frequencies are): a
+5 Hz sinusoid is not the 459th harmonic of a line left at 0.0109 Hz."""
 
 
 class Sinusoid(RegressionTerm):
@@ -101,10 +107,10 @@ def harmonic_family(first_hz: float, second_hz: float, duration_s: float) -> tup
     """(fundamental, harmonic) where the two frequencies (Hz) are one and a whole multiple of
     the other within :data:`SAME_LINE_BINS` resolutions (1 / ``duration_s``): lines of one
     periodic waveform, the lower the fundamental, ``harmonic`` the higher's multiple of it
-    (1: the same line); None otherwise."""
+    (1: the same line), at most :data:`MAX_HARMONIC`; None otherwise."""
     low, high = sorted((first_hz, second_hz))
     harmonic = max(round(high / low), 1)
-    if abs(high - harmonic * low) <= SAME_LINE_BINS / duration_s:
+    if harmonic <= MAX_HARMONIC and abs(high - harmonic * low) <= SAME_LINE_BINS / duration_s:
         return low, harmonic
     return None
 

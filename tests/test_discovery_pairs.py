@@ -85,3 +85,22 @@ def test_the_gauss_markov_pair_is_drawn_where_each_term_is_decisive_beside_the_o
         "rate_random_walk"
     ]
     assert ratio < charge
+
+
+def test_a_step_near_the_records_end_is_fitted_without_a_traceback():
+    """Gauss-Markov noise and a walk (the pair study's seed 1019): the level scan located a
+    step at 588.08 s of 600 s, whose column held no information in the bins above the block
+    means' band, and inverting the singular precision stopped discovery with a traceback. The
+    fit now stands, its step size and variance (from the block means) finite, the variance
+    positive."""
+    from bayescal.inference._discovery_fit import Context, DiscoveryData, fit_model
+    from bayescal.models._composite import ModelSpec
+    from bayescal.models.effects.bias_step import BiasStep
+
+    values = pairs.simulate("gauss_markov+rate_random_walk", np.random.default_rng(1019), 10.0)
+    data = DiscoveryData(values=values, rate_hz=pairs.RATE, channel="gyro", unit="deg/s")
+    context = Context.of(data, values, values)
+    fit = fit_model(context, ModelSpec.from_names(("white",)).with_effect(BiasStep(588.08)))
+    variance = np.diag(fit.beta_covariance)
+    assert np.all(np.isfinite(fit.beta)) and np.all(np.isfinite(variance))
+    assert variance[-1] > 0

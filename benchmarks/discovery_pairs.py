@@ -12,15 +12,30 @@ long), holding both effects of its pair at random sizes the record can be expect
   0.5-1.5x the white noise's, and flicker of 0.15-0.25 sample sd (the two slow terms of
   every MEMS gyro);
 - ``gauss_markov+rate_random_walk``: a Gauss-Markov bias of 0.3-0.6 sample sd with tau
-  2-5 % of the record (it returns to its mean 20-50 times: a Gauss-Markov term is told from a
-  random walk by that return, worth about T / (4 tau) nats), and a random walk as above (a
-  navigation filter's usual bias model);
+  T / 350 to T / 250, and a random walk whose spectrum crosses the Gauss-Markov plateau at
+  6-10 / T (a navigation filter's usual bias model; drawn as ``discovery_unknowns.py`` draws
+  it). Each term beside the other must be decisive: the walk shows only below the
+  Gauss-Markov corner, the Gauss-Markov term only where its plateau stands above the walk. As
+  first drawn (tau 2-5 % of the record, the walk 0.5-1.5 sample sd at its length) neither
+  was: over the 50 records of seed 0, computed as ``--information`` computes it, the walk
+  beside the Gauss-Markov term held 0.0-0.7 nats (its charge 9.4), the Gauss-Markov term
+  beside the walk 0.8-6.4 (its charge 12.1), and discovery named one term in all 50;
 - ``sinusoid+output_filter``: a line of 0.3-0.6 sample sd between 1 and 10 Hz, and a one-tap
   output filter with F 0.3-0.6 (vibration read through the part's own low-pass);
 - ``quantization+white``: the samples rounded to a grid of 0.5-1 sample sd (a low-resolution
   converter: the grid is named ``quantization``);
 - ``bias_step+rate_random_walk``: a step of 0.5-1 sample sd at 25-75 % of the record
   (a mode change), and a random walk as above.
+
+``--information`` prints, instead of running discovery, what each record's truth lets a
+search find: for each term of a pair, the expected log likelihood ratio of the pair against
+the model without it (Whittle, the truth's spectrum against the best fit of the other term and
+white noise over the record's Fourier frequencies; a step's beside a walk in closed form,
+s^2 / (2 q sqrt(q^2 + 4 sigma^2)) for a step s, a walk's per-sample step q and white sd
+sigma), beside what the search charges the term (its Schwarz cost, 0.5 log of the record's
+frequencies per continuous parameter, the log of the values a searched parameter chose among,
+and the decisive log 100). A record where a term's expected ratio is below its charge is
+named exactly about half the time or less, whatever the search does.
 
 A record is a hit when discovery names exactly the pair (a random walk it adds beside it
 counts against it, as every extra name does). Discovery runs without its final posterior
@@ -54,29 +69,39 @@ PAIRS = {
 baseline)."""
 
 
-def _random_walk(rng, n: int) -> np.ndarray:
-    """A random walk (deg/s) whose spread at the record's length is 0.5-1.5 sample sds."""
-    step = rng.uniform(0.5, 1.5) * WHITE_SD / math.sqrt(n)
-    return np.cumsum(step * rng.standard_normal(n))
+def _walk_step(rng, n: int) -> float:
+    """The per-sample step (deg/s) of a random walk whose spread at the record's length is
+    0.5-1.5 sample sds."""
+    return rng.uniform(0.5, 1.5) * WHITE_SD / math.sqrt(n)
 
 
-def simulate(pair: str, rng, minutes: float) -> np.ndarray:
-    """The record of ``pair`` (module docstring), deg/s at :data:`RATE`."""
+def draw(pair: str, rng, minutes: float) -> tuple[np.ndarray, dict]:
+    """The record of ``pair`` (module docstring), deg/s at :data:`RATE`, and its truth: the
+    pair's parameters per sample (``walk``: a random walk's step; ``flicker``: B; ``sigma``
+    and ``tau_samples``: a Gauss-Markov term's; ``step``: a step's size)."""
     import bayescal as bc
 
     n = int(minutes * 60 * RATE)
     t = np.arange(n) / RATE
     white = WHITE_SD * rng.standard_normal(n + 1)
     values = 0.2 + white[1:]
+    truth = {}
     match pair:
         case "rate_random_walk+bias_instability":
-            flicker = bc.NoiseModel(RATE, B=rng.uniform(0.15, 0.25) * WHITE_SD)
-            values += _random_walk(rng, n) + flicker.simulate(n, seed=int(rng.integers(2**31)))
+            truth["flicker"] = rng.uniform(0.15, 0.25) * WHITE_SD
+            flicker = bc.NoiseModel(RATE, B=truth["flicker"])
+            truth["walk"] = _walk_step(rng, n)
+            values += np.cumsum(truth["walk"] * rng.standard_normal(n))
+            values += flicker.simulate(n, seed=int(rng.integers(2**31)))
         case "gauss_markov+rate_random_walk":
-            tau, sigma = rng.uniform(0.02, 0.05) * n / RATE, rng.uniform(0.3, 0.6) * WHITE_SD
+            tau, sigma = n / RATE / rng.uniform(250, 350), rng.uniform(0.3, 0.6) * WHITE_SD
             phi = math.exp(-1 / (RATE * tau))
             drive = rng.standard_normal(n) * sigma * math.sqrt(1 - phi * phi)
-            values += signal.lfilter([1.0], [1.0, -phi], drive) + _random_walk(rng, n)
+            values += signal.lfilter([1.0], [1.0, -phi], drive)
+            # K where the walk's spectrum crosses the plateau 2 sigma^2 tau at 6-10 / T.
+            k = 2 * math.pi * sigma * math.sqrt(2 * tau) * rng.uniform(6, 10) / (n / RATE)
+            truth |= {"sigma": sigma, "tau_samples": tau * RATE, "walk": k / math.sqrt(RATE)}
+            values += truth["walk"] * np.cumsum(rng.standard_normal(n))
         case "sinusoid+output_filter":
             coefficient = rng.uniform(0.3, 0.6)
             values = 0.2 + (white[1:] + coefficient * white[:-1]) / (1 + coefficient)
@@ -87,11 +112,98 @@ def simulate(pair: str, rng, minutes: float) -> np.ndarray:
             values = np.round(values / lsb) * lsb
         case "bias_step+rate_random_walk":
             at = rng.uniform(0.25, 0.75) * n / RATE
-            size = rng.uniform(0.5, 1.0) * WHITE_SD * rng.choice([-1, 1])
-            values += size * (t >= at) + _random_walk(rng, n)
+            truth["step"] = rng.uniform(0.5, 1.0) * WHITE_SD * rng.choice([-1, 1])
+            truth["walk"] = _walk_step(rng, n)
+            values += truth["step"] * (t >= at) + np.cumsum(truth["walk"] * rng.standard_normal(n))
         case _:
             raise ValueError(f"pair={pair!r}: one of {', '.join(PAIRS)}")
-    return values
+    return values, truth
+
+
+def simulate(pair: str, rng, minutes: float) -> np.ndarray:
+    """The record of ``pair`` (module docstring), deg/s at :data:`RATE`."""
+    return draw(pair, rng, minutes)[0]
+
+
+SPECTRAL_PARAMETERS = {
+    "rate_random_walk": ("walk",),
+    "bias_instability": ("flicker",),
+    "gauss_markov": ("sigma", "tau_samples"),
+}
+"""The truth's parameters of each term with a spectrum (:func:`_spectra`)."""
+
+
+def _spectra(truth: dict, nu: np.ndarray) -> dict:
+    """Each term's two-sided spectrum per cycle per sample at frequencies ``nu``, from
+    ``truth`` (or from parameters of the same names)."""
+    spectra = {}
+    if "walk" in truth:
+        spectra["rate_random_walk"] = truth["walk"] ** 2 / (4 * np.sin(np.pi * nu) ** 2)
+    if "flicker" in truth:  # B^2 / (2 pi |f|) per Hz, two-sided
+        spectra["bias_instability"] = truth["flicker"] ** 2 / (2 * np.pi * nu)
+    if "sigma" in truth:
+        phi = math.exp(-1 / truth["tau_samples"])
+        response = np.abs(1 - phi * np.exp(-2j * np.pi * nu)) ** 2
+        spectra["gauss_markov"] = truth["sigma"] ** 2 * (1 - phi * phi) / response
+    return spectra
+
+
+def _without(term: str, truth: dict, nu: np.ndarray) -> float:
+    """The expected log likelihood ratio of ``truth`` against the best fit of the model
+    without ``term`` (the other term and white noise), Whittle over frequencies ``nu``:
+    the minimum over that model's parameters of sum(r - 1 - log r), r = truth / model."""
+    from scipy import optimize
+
+    full = WHITE_SD**2 + sum(_spectra(truth, nu).values())
+    kept = [
+        key
+        for other, keys in SPECTRAL_PARAMETERS.items()
+        if other != term and keys[0] in truth
+        for key in keys
+    ]
+
+    def divergence(logs):
+        model = dict(zip(kept, np.exp(logs[1:]), strict=True))
+        ratio = full / (np.exp(2 * logs[0]) + sum(_spectra(model, nu).values()))
+        return float(np.sum(ratio - 1 - np.log(ratio)))
+
+    start = np.log([WHITE_SD, *(truth[key] for key in kept)])
+    # The term left out moves the others: a Gauss-Markov term alone takes a longer tau.
+    tries = [start + shift * np.eye(len(start))[-1] for shift in (0.0, 1.0, 2.0)]
+    return min(
+        optimize.minimize(divergence, x, method="Nelder-Mead", options={"maxiter": 4000}).fun
+        for x in tries
+    )
+
+
+def information(pair: str, truth: dict, n: int) -> dict:
+    """term -> (expected log likelihood ratio of the pair against the model without it, what
+    the search charges it) for each term of ``pair`` whose truth is a spectrum or a step
+    (module docstring); empty for the others."""
+    from bayescal.models.effects._base import TIME_CONSTANT_PENALTY
+
+    nu = np.arange(1, n // 2 + 1) / n
+    schwarz = 0.5 * math.log(n // 2)
+    decisive = math.log(100.0)
+    charge = {
+        "rate_random_walk": schwarz + decisive,
+        "bias_instability": schwarz + decisive,
+        "gauss_markov": schwarz + TIME_CONSTANT_PENALTY + decisive,
+        "bias_step": schwarz + math.log(n) + decisive,
+    }
+    found = {term: (_without(term, truth, nu), charge[term]) for term in _spectra(truth, nu)}
+    if "step" in truth:
+        q = truth["walk"]
+        found["bias_step"] = (
+            truth["step"] ** 2 / (2 * q * math.sqrt(q * q + 4 * WHITE_SD**2)),
+            charge["bias_step"],
+        )
+        # Beside a step the walk is told from white noise (the step's column takes the step).
+        found["rate_random_walk"] = (
+            _without("rate_random_walk", {"walk": q}, nu),
+            charge["rate_random_walk"],
+        )
+    return found
 
 
 def run(job: tuple[str, int, float]) -> dict:
@@ -138,6 +250,26 @@ def table(results: list[dict]) -> list[str]:
     return lines
 
 
+def information_table(jobs: list[tuple[str, int, float]]) -> list[str]:
+    """Per pair and term: the median expected log likelihood ratio over the records of
+    ``jobs``, the search's charge, and the records where the ratio exceeds it."""
+    ratios: dict[tuple[str, str], list] = {}
+    for pair, seed, minutes in jobs:
+        _, truth = draw(pair, np.random.default_rng(seed), minutes)
+        n = int(minutes * 60 * RATE)
+        for term, (ratio, charge) in information(pair, truth, n).items():
+            ratios.setdefault((pair, term), []).append((ratio, charge))
+    lines = []
+    for (pair, term), found in ratios.items():
+        ratio, charge = np.array(found).T
+        lines.append(
+            f"  {pair:<36} {term:<18} expected log LR median {np.median(ratio):6.1f} "
+            f"(range {ratio.min():.1f}-{ratio.max():.1f}), charge {charge[0]:.1f}: above it "
+            f"{np.count_nonzero(ratio > charge)}/{ratio.size}"
+        )
+    return lines
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--records", type=int, default=50, help="records per pair")
@@ -146,6 +278,11 @@ def main() -> int:
     parser.add_argument("--pairs", nargs="*", default=list(PAIRS), choices=list(PAIRS))
     parser.add_argument("--per-process", type=int, default=4, help="records per worker")
     parser.add_argument("--workers", type=int, default=1, help="worker processes at once")
+    parser.add_argument(
+        "--information",
+        action="store_true",
+        help="print what each record's truth lets a search find, without running discovery",
+    )
     args = parser.parse_args()
     jobs = [
         (pair, args.seed * 100_000 + 1000 * index + k, args.minutes)
@@ -153,6 +290,9 @@ def main() -> int:
         for index, pair in enumerate(PAIRS)
         if pair in args.pairs
     ]
+    if args.information:
+        print("\n".join(information_table(jobs)))
+        return 0
     started = time.perf_counter()
     results = []
     # Workers replaced every few records: memory stays one discovery's per worker.

@@ -345,3 +345,46 @@ def test_a_time_constant_below_the_grid_is_searched_down_to_a_sample(monkeypatch
     monkeypatch.setattr(_discovery, "fit_model", lambda context, spec: peaked_at(2.0)(spec))
     _, record = _discovery.search_time(context, lambda t: t, "warmup_transient")
     assert min(record["time_constant_s"]) >= 5.0
+
+
+def test_a_random_walk_beside_a_gauss_markov_term_is_found_with_its_time_constant_searched():
+    """A Gauss-Markov term of tau_c = T / 300 and a random walk that crosses its plateau at
+    8 / T: each is worth some 25 nats against the other alone (block means and Whittle bins,
+    from the truth). The Gauss-Markov term is accepted first, at the time constant that takes
+    in the most of both (discovery_unknowns' seed 28: 15 s for 3.8 s), and beside it held
+    there the random walk gained nothing; the term then failed its own Allan check and was
+    withdrawn: nothing named. Its correlation time is searched again beside the walk, whose
+    spectrum is its tail, and both are named, the time constant near the truth's."""
+    rng = np.random.default_rng(0)
+    n = int(6 * 60 * RATE)
+    duration = n / RATE
+    tau, sigma = duration / 300, 0.5 * WHITE_SD
+    phi = math.exp(-1 / (RATE * tau))
+    drive = rng.standard_normal(n) * sigma * math.sqrt(1 - phi * phi)
+    walk = 2 * math.pi * sigma * math.sqrt(2 * tau) * 8 / duration
+    values = 0.1 + WHITE_SD * rng.standard_normal(n) + lfilter([1.0], [1.0, -phi], drive)
+    values += walk * np.cumsum(rng.standard_normal(n)) / math.sqrt(RATE)
+    found = discover(values, posterior=False)
+    assert sorted(named(found)) == ["gauss_markov", "rate_random_walk"]
+    (markov,) = [f.effect for f in found.result.findings if f.name == "gauss_markov"]
+    assert tau / 2 < markov.time_constant_s < 2 * tau
+
+
+def test_a_sinusoid_at_a_harmonic_of_the_line_left_is_not_apart_from_it():
+    """A sinusoid fitted at 0.0218 Hz, twice a sawtooth's fundamental of 0.0109 Hz left
+    failing in a 1085 s record (discovery_unknowns' sawtooth seed 5): the two are lines of one
+    periodic waveform, so the sinusoid did not explain its own line (not apart) — either way
+    round, as a line left at its second harmonic is not. A 5 Hz sinusoid beside that line
+    (its 459th multiple within 5 resolutions) is apart: beyond the 10th harmonic a whole
+    multiple is chance; and so is a 2 Hz one beside a line at 1.37 Hz."""
+    from bayescal.models.effects.sinusoid import Sinusoid
+
+    def line_at(frequency):
+        return {"location": {"frequency_hz": frequency}}
+
+    duration = 1085.0
+    assert not Sinusoid(2 * 0.0109).apart(line_at(0.0109), duration)
+    assert not Sinusoid(0.0109).apart(line_at(2 * 0.0109), duration)
+    assert Sinusoid(5.0).apart(line_at(0.0109), duration)
+    assert Sinusoid(2.0).apart(line_at(1.37), duration)
+    assert Sinusoid(1.37).apart(line_at(2.0), duration)

@@ -10,7 +10,7 @@ from ..inference._discovery_search import (
     SearchResult,
     check_band,
 )
-from ..models.effects.sinusoid import SAME_LINE_BINS, Sinusoid
+from ..models.effects.sinusoid import SAME_LINE_BINS, Sinusoid, harmonic_family
 
 ENOUGH_CYCLES = 10
 """A record that holds this many cycles of the slowest frequency (or averaging times) where a
@@ -37,11 +37,10 @@ def _fundamental(frequency: float, withdrawn_hz: tuple, duration_s: float) -> tu
     frequency and a whole multiple of the other, within :data:`SAME_LINE_BINS` resolutions
     (1 / ``duration_s``): the harmonics of one periodic waveform that is not a sine (a
     sawtooth, a controller's cycle), the lower the fundamental; None otherwise."""
-    tolerance = SAME_LINE_BINS / duration_s
     for line in withdrawn_hz:
-        low, high = sorted((frequency, line))
-        harmonic = max(round(high / low), 1)
-        if abs(high - harmonic * low) <= tolerance:
+        family = harmonic_family(frequency, line, duration_s)
+        if family is not None:
+            low, _ = family
             return low, round(frequency / low)
     return None
 

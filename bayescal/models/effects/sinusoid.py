@@ -12,6 +12,12 @@ MAX_COUNT = 2
 SAME_LINE_BINS = 5.0
 """A line within this many Fourier resolutions of a fitted one (or of its harmonic) is
 taken for it."""
+MAX_HARMONIC = 10
+"""The highest multiple of a line taken for its harmonic. A periodic waveform's power lies in
+its first harmonics (a sawtooth's k-th has 1/k of the fundamental's amplitude); and whole
+multiples of a slow line lie so close that any frequency is near one (of a 0.0109 Hz line
+over 1085 s, within the 5 resolutions taken for one line, 85 % of all frequencies are): a
+5 Hz sinusoid is not the 459th harmonic of a line left at 0.0109 Hz."""
 
 
 class Sinusoid(RegressionTerm):
@@ -86,12 +92,27 @@ class Sinusoid(RegressionTerm):
         so this sinusoid explained its own. A line left at this frequency (one that wanders
         or is broad) or at a harmonic (a periodic signal that is not a sine: a sawtooth, a
         controller's cycle) is not a sinusoid's."""
-        frequency = check["location"]["frequency_hz"]
-        harmonic = max(round(frequency / self.frequency_hz), 1)
-        return abs(frequency - harmonic * self.frequency_hz) > SAME_LINE_BINS / duration_s
+        # Either way round: a sinusoid at a harmonic of the line left (the fundamental of a
+        # sawtooth left failing) is as much the waveform's as one at its fundamental.
+        return (
+            harmonic_family(check["location"]["frequency_hz"], self.frequency_hz, duration_s)
+            is None
+        )
 
     def simulate(self, time_s: np.ndarray, amplitude: float, phase: float) -> np.ndarray:
         return amplitude * np.sin(2 * np.pi * self.frequency_hz * time_s + phase)
+
+
+def harmonic_family(first_hz: float, second_hz: float, duration_s: float) -> tuple | None:
+    """(fundamental, harmonic) where the two frequencies (Hz) are one and a whole multiple of
+    the other within :data:`SAME_LINE_BINS` resolutions (1 / ``duration_s``): lines of one
+    periodic waveform, the lower the fundamental, ``harmonic`` the higher's multiple of it
+    (1: the same line), at most :data:`MAX_HARMONIC`; None otherwise."""
+    low, high = sorted((first_hz, second_hz))
+    harmonic = max(round(high / low), 1)
+    if harmonic <= MAX_HARMONIC and abs(high - harmonic * low) <= SAME_LINE_BINS / duration_s:
+        return low, harmonic
+    return None
 
 
 def _circular_summary(angles: np.ndarray) -> dict:

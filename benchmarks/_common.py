@@ -77,3 +77,16 @@ def stand_in_recording(unit: int, run: int, *, bias_mean, bias_sd, log_draws=Non
         bias_mean=bias_mean,
         bias_sd=bias_sd,
     )
+
+
+def fresh_cache_environment(folder) -> dict:
+    """This process's environment for a child that runs as on a machine's first run: its
+    caches under ``folder`` (``XDG_CACHE_HOME``), and none of the cache folders this process's
+    bayescal put in the environment when it loaded JAX (``bayescal._caches.enable_caches``),
+    which would hand the child the warm ones."""
+    import os
+
+    inherited = ("JAX_COMPILATION_CACHE_DIR", "BAYESCAL_TRACE_CACHE")
+    environment = {k: v for k, v in os.environ.items() if k not in inherited}
+    environment["XDG_CACHE_HOME"] = str(folder)
+    return environment

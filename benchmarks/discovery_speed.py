@@ -14,7 +14,6 @@ issue, a whole process).
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 import tempfile
@@ -22,6 +21,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import fresh_cache_environment
 
 import bayescal as bc
 
@@ -68,7 +68,7 @@ def whole_processes() -> None:
             header="time,gyro_x[deg/s],temperature[degC]",
             comments="",
         )
-        environment = {**os.environ, "XDG_CACHE_HOME": str(Path(folder) / "cache")}
+        environment = fresh_cache_environment(Path(folder) / "cache")
         entry = "import sys; from bayescal.cli import main; sys.exit(main())"
         command = [sys.executable, "-c", entry, "discover", str(path), "--channel"]
         command += ["gyro_x", "--temperature", "temperature", "--quiet", "--seed", "3"]

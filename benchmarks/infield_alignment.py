@@ -30,7 +30,6 @@ the aging in a few directions only and the east level and the heading lean on it
 
 import argparse
 import math
-import os
 import resource
 import subprocess
 import sys
@@ -39,6 +38,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import fresh_cache_environment
 
 ARW_LIMIT = 0.002 / math.sqrt(1200 / 3600)  # deg/h
 SLOPE_IDEAL = 0.00076  # deg/h/degC, NAVIGATION.md
@@ -129,7 +129,7 @@ def cold_command_line(old) -> tuple[float, float]:
             {f"{k}[{recording.header_units[k]}]": v for k, v in recording.columns.items()},
         )
         bc.save_thermal_calibrations(old, folder / "old.json")
-        environment = {**os.environ, "XDG_CACHE_HOME": str(folder / "cache")}
+        environment = fresh_cache_environment(folder / "cache")
         command = [
             *(sys.executable, "-m", "bayescal.cli._main"),
             *("thermal", "infield", str(folder / "park.csv")),

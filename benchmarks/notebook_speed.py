@@ -90,9 +90,9 @@ def _devices() -> dict:
 
 def run(samples: int, calls: int, cache: Path) -> dict:
     """:func:`child` in a fresh process whose caches live in ``cache``."""
-    environment = {**os.environ, "XDG_CACHE_HOME": str(cache)}
-    for name in ("JAX_COMPILATION_CACHE_DIR", "BAYESCAL_TRACE_CACHE"):
-        environment.pop(name, None)
+    from _common import fresh_cache_environment
+
+    environment = fresh_cache_environment(cache)
     command = [sys.executable, __file__, "--child", str(samples), "--calls", str(calls)]
     output = subprocess.run(
         command, env=environment, check=True, capture_output=True, text=True

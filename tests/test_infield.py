@@ -158,9 +158,10 @@ def files(tmp_path_factory, old):
     return folder, columns
 
 
-def test_the_command_line_end_to_end(run_cli, files):
-    folder, _ = files
-    code, out, err = run_cli(
+def _park_command(folder) -> tuple:
+    """``bayescal thermal infield`` on the files fixture's park: aligned over its first 600 s,
+    in deg/s."""
+    return (
         "thermal",
         "infield",
         folder / "park.csv",
@@ -172,6 +173,13 @@ def test_the_command_line_end_to_end(run_cli, files):
         "0:600",
         "--unit",
         "deg/s",
+    )
+
+
+def test_the_command_line_end_to_end(run_cli, files):
+    folder, _ = files
+    code, out, err = run_cli(
+        *_park_command(folder),
         "--json",
         folder / "out.json",
         "--save",
@@ -659,17 +667,7 @@ def test_a_report_that_cannot_be_written_exits_2_and_writes_nothing(run_cli, fil
         (tmp_path / "out.json", "--json already writes to this file"),
     ):
         code, _, err = run_cli(
-            "thermal",
-            "infield",
-            folder / "park.csv",
-            "--calibration",
-            folder / "old.json",
-            "--latitude",
-            "45",
-            "--align",
-            "0:600",
-            "--unit",
-            "deg/s",
+            *_park_command(folder),
             "--json",
             tmp_path / "out.json",
             "--save",

@@ -553,10 +553,7 @@ def infield_points_figure(
                 ms=4,
                 label="after",
             )
-        axes.set_xlabel(f"temperature [{pretty_unit(temperature_unit)}]")
-        axes.set_ylabel(f"{name} bias [{shown}]")
-        axes.set_title(name, fontsize=9)
-        axes.grid(True, lw=0.3, alpha=0.6)
+        _gyro_bias_axes(axes, name, temperature_unit, shown)
     panels[0].legend(fontsize=7, loc="best")
     title = (
         f"the tilt-rate points, ±1 sd: before and after {heading_deg:.4g}° of heading error "
@@ -566,6 +563,14 @@ def infield_points_figure(
     )
     figure.suptitle(title, fontsize=9)
     return figure
+
+
+def _gyro_bias_axes(axes, name: str, temperature_unit: str, shown: str) -> None:
+    """One gyro's panel of bias against temperature: its labels, title and grid."""
+    axes.set_xlabel(f"temperature [{pretty_unit(temperature_unit)}]")
+    axes.set_ylabel(f"{name} bias [{shown}]")
+    axes.set_title(name, fontsize=9)
+    axes.grid(True, lw=0.3, alpha=0.6)
 
 
 def infield_calibration_figure(old: dict, new: dict, points: dict, scales: dict, unit: str):
@@ -604,10 +609,7 @@ def infield_calibration_figure(old: dict, new: dict, points: dict, scales: dict,
             capsize=2,
             label="the alignment's points (±1 sd)",
         )
-        axes.set_xlabel(f"temperature [{pretty_unit(updated.temperature_unit)}]")
-        axes.set_ylabel(f"{name} bias [{shown}]")
-        axes.set_title(name, fontsize=9)
-        axes.grid(True, lw=0.3, alpha=0.6)
+        _gyro_bias_axes(axes, name, updated.temperature_unit, shown)
     panels[0].legend(fontsize=7, loc="best")
     return figure
 

@@ -97,3 +97,20 @@ def test_a_filter_shape_that_bends_n_gives_way_to_the_biquad():
     n = fit.parameters["N"]
     assert n.q05 <= shaped["N"] <= n.q95
     assert fit.passed, fit.failures
+
+
+def test_a_steep_butterworth_has_a_gradient_far_above_its_corner():
+    """A steep Butterworth (order 5,900, as a MAP's search passed through) far above its
+    corner: ratio^(2n) overflows, the gain is zero, and so is its gradient — not NaN, on
+    which the MAP's BFGS stalled to its step limit (2,000 steps, 0.15 s of a fit)."""
+    import jax
+
+    from bayescal.models.effects.butterworth_filter import ButterworthFilter
+
+    def gain_at_half_rate(order):
+        values = {"filter_cutoff": 10.0, "filter_order": order, "filter_warping": 0.5}
+        return ButterworthFilter.gain(0.45, values, 100.0)
+
+    assert float(gain_at_half_rate(5900.0)) == 0.0
+    assert float(jax.grad(gain_at_half_rate)(5900.0)) == 0.0
+    assert np.isfinite(float(jax.grad(gain_at_half_rate)(2.0)))

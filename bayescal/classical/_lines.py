@@ -307,6 +307,11 @@ class _Floors:
         weight = usable.astype(float)
         self.sums = self._padded(np.cumsum(power * weight))
         self.counts = self._padded(np.cumsum(weight))
+        # A window's sum is a difference of cumulative sums, each rounded to a part in 10^16
+        # of the whole record's: a floor below that (a digital filter's stop band with no
+        # noise after it, 13 decades down) reads as zero or less, and every ordinate above
+        # it was a line of infinite ratio. Such a floor is not resolved: it counts nothing.
+        self.resolution = 64 * np.finfo(float).eps * self.sums[-1]
 
     def _padded(self, cumulative: np.ndarray) -> np.ndarray:
         padded = np.empty(cumulative.size + 1 + 2 * self.PAD)
@@ -328,6 +333,7 @@ class _Floors:
             )
 
         total, count = read(self.sums), read(self.counts)
+        count = np.where(total > self.resolution, count, 0.0)
         with np.errstate(invalid="ignore", divide="ignore"):
             return total / count, count
 

@@ -2,6 +2,7 @@
 
 from typing import ClassVar
 
+import jax
 import jax.numpy as jnp
 
 from ... import _x64  # noqa: F401  (float64 before any JAX array)
@@ -53,4 +54,7 @@ class ButterworthFilter(LowpassShape):
         cutoff = values["filter_cutoff"] / rate_hz
         order, warping = values["filter_order"], values["filter_warping"]
         ratio = jnp.tan(warping * jnp.pi * nu) / jnp.tan(warping * jnp.pi * cutoff)
-        return 1.0 / (1.0 + jnp.exp(2.0 * order * jnp.log(ratio)))
+        # 1 / (1 + ratio^(2n)) as the logistic of -2n log(ratio): the same gain, and where
+        # ratio^(2n) overflows (a steep filter far above its corner) a gradient of zero, not
+        # inf / inf = NaN, on which the MAP's BFGS stalled to its step limit.
+        return jax.nn.sigmoid(-2.0 * order * jnp.log(ratio))

@@ -10,7 +10,7 @@ import pytest
 from scipy import signal
 
 import bayescal as bc
-from bayescal.classical._lines import find_lines
+from bayescal.classical._lines import FULL_REACH, GUARD, SCALES, _Floors, find_lines
 from bayescal.inference._lines_posterior import ALIAS_GAIN
 from bayescal.models._noise_problem import record_components
 from bayescal.models._whittle import spectral_summary
@@ -57,6 +57,25 @@ def test_no_line_in_a_digital_filters_stop_band():
     noise = np.random.default_rng(7).standard_normal(2**18)
     search = find_lines(0.05 * signal.lfilter(numerator, denominator, noise), RATE)
     assert search.lines == ()
+
+
+def test_the_scan_s_floors_read_as_slices_are_those_read_by_index():
+    """The scan reads its millions of floors as slices (:meth:`_Floors.of_windows`): the
+    same floors and counts, to the bit, as the bounds of :meth:`_Floors.at`, at every scale,
+    below and beyond the ordinate where the half-width stops growing, with unusable
+    ordinates among them."""
+    rng = np.random.default_rng(0)
+    size = 3 * FULL_REACH
+    power = rng.exponential(size=size) * np.linspace(1.0, 5.0, size)
+    usable = rng.random(size) > 0.01
+    floors = _Floors(power, usable)
+    for width in SCALES:
+        for first, stop in ((10, size - width), (10, FULL_REACH // 2), (FULL_REACH + 7, size - 5)):
+            centre = np.arange(first, stop) + (width - 1) / 2
+            expected = floors.at(centre, np.full(centre.size, GUARD + (width - 1) / 2))
+            got = floors.of_windows(first, stop, width)
+            np.testing.assert_array_equal(got[1], expected[1])
+            np.testing.assert_array_equal(got[0], expected[0])
 
 
 def test_a_record_too_short_is_not_searched():

@@ -355,26 +355,23 @@ class _Floors:
 
     def of_windows(self, first: int, stop: int, width: int):
         """:meth:`at` each window of ``width`` ordinates starting at first .. stop - 1 (its
-        centre mid-window, its guard GUARD beyond its edges): the same bounds, all whole
-        ordinates, read as slices run by run of one half-width."""
-        starts = np.arange(first, stop)
-        # The half-width grows with the centre to its largest, FLOOR_ORDINATES[1], which
-        # every centre from FULL_REACH on takes: computed only below it.
-        head = int(np.clip(FULL_REACH - first, 0, starts.size))
-        half = np.full(starts.size, FLOOR_ORDINATES[1])
-        half[:head] = _half_width(starts[:head] + (width - 1) / 2)
-        changes = np.flatnonzero(np.diff(half)) + 1
-        floors, counts = np.empty(starts.size), np.empty(starts.size)
-        for lo, hi in zip((0, *changes), (*changes, starts.size), strict=True):
-            reach, a, b = int(half[lo]), first + lo + self.PAD, first + hi + self.PAD
-            inner_left = slice(a - GUARD, b - GUARD)
-            outer_left = slice(a - GUARD - reach, b - GUARD - reach)
-            inner_right = slice(a + width + GUARD, b + width + GUARD)
-            outer_right = slice(a + width + GUARD + reach, b + width + GUARD + reach)
-            floors[lo:hi], counts[lo:hi] = self._mean(
-                (outer_left, inner_left), (inner_right, outer_right)
-            )
-        return floors, counts
+        centre mid-window, its guard GUARD beyond its edges). The half-width grows with the
+        centre to its largest, which every window from :data:`FULL_REACH` on takes: the
+        first few thousand windows are read by index (:meth:`at`), the millions beyond, whole
+        ordinates at fixed offsets, as slices."""
+        guard = GUARD + (width - 1) / 2
+        head = np.arange(first, max(first, min(stop, FULL_REACH)))
+        floors, counts = self.at(head + (width - 1) / 2, np.full(head.size, guard))
+        if stop <= FULL_REACH:
+            return floors, counts
+        reach = FLOOR_ORDINATES[1]
+        a, b = max(first, FULL_REACH) + self.PAD, stop + self.PAD
+        inner_left = slice(a - GUARD, b - GUARD)
+        outer_left = slice(a - GUARD - reach, b - GUARD - reach)
+        inner_right = slice(a + width + GUARD, b + width + GUARD)
+        outer_right = slice(a + width + GUARD + reach, b + width + GUARD + reach)
+        tail = self._mean((outer_left, inner_left), (inner_right, outer_right))
+        return np.concatenate((floors, tail[0])), np.concatenate((counts, tail[1]))
 
 
 FULL_REACH = math.ceil(FLOOR_ORDINATES[1] / FLOOR_FRACTION)

@@ -260,6 +260,39 @@ def _extra_expected(length: int, taper_fraction: float, index, components) -> np
     ).reshape(len(components), len(index)) / np.sum(taper**2)
 
 
+def _binning(length: int, bin_width: float) -> tuple:
+    """The bins of a segment of ``length`` increments: their first and last-plus-one
+    frequency indices, sizes, every frequency's u (log cycles per sample), the hat functions
+    (:func:`_hats`) and each node's count (the sum of its hat). They depend on the length
+    alone: kept for lengths up to :data:`KEPT_FREQUENCIES` frequencies (the hats of 2^20
+    samples, 12 MB, took 50-70 ms of each fit of a notebook's record); longer ones are
+    computed, their hats too large to keep."""
+    if (length - 1) // 2 <= KEPT_FREQUENCIES:
+        return _kept_binning(length, bin_width)
+    return _computed_binning(length, bin_width)
+
+
+KEPT_FREQUENCIES = 2**20
+"""The most frequencies of a segment whose bins :func:`_binning` keeps (hats of 24 MB)."""
+
+
+def _computed_binning(length: int, bin_width: float) -> tuple:
+    """:func:`_binning`, computed."""
+    n_frequencies = (length - 1) // 2
+    edges = _bin_edges(n_frequencies, bin_width)
+    lows, highs = edges[:-1], edges[1:]
+    counts = highs - lows
+    u = np.log(np.arange(1, n_frequencies + 1) / length)
+    hats = _hats(u, lows, counts)
+    node_count = _bin_sums(np.ones_like(u), hats, lows - 1)
+    for array in (lows, highs, counts, u, hats, node_count):
+        array.setflags(write=False)
+    return lows, highs, counts, u, hats, node_count
+
+
+_kept_binning = functools.lru_cache(maxsize=2)(_computed_binning)
+
+
 def _hats(u: np.ndarray, lows: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """(3, frequencies): the hat functions of each bin's three nodes (first, middle, last
     frequency) at every frequency's u; a bin of one frequency puts all of it on its first."""
@@ -327,13 +360,12 @@ def spectral_summary(
         norm = np.sum(taper**2)
         periodogram = np.abs(transform) ** 2 / norm
         n_frequencies = (length - 1) // 2
-        edges = _bin_edges(n_frequencies, bin_width)
-        lows, highs = edges[:-1], edges[1:]
-        counts = highs - lows
-        u = np.log(np.arange(1, n_frequencies + 1) / length)
-        hats = _hats(u, lows, counts)
+        binning = _binning(length, bin_width)
+        lows, highs, counts, u, hats, node_count = binning
         present = _outside(np.arange(1, n_frequencies + 1) * rate_hz / length, exclude)
-        hats = hats * present
+        if not present.all():
+            hats = hats * present
+            node_count = _bin_sums(np.ones_like(u), hats, lows - 1)
         kept = np.add.reduceat(present, lows - 1)
         keep = kept > 0
         if regressors is not None:
@@ -377,7 +409,7 @@ def spectral_summary(
         parts["frequency_hz"].append(frequency[keep])
         power = _bin_sums(periodogram[1 : n_frequencies + 1], hats, lows - 1)
         parts["node_power"].append(power[:, keep])
-        parts["node_count"].append(_bin_sums(np.ones_like(u), hats, lows - 1)[:, keep])
+        parts["node_count"].append(node_count[:, keep])
         parts["node_frequency"].append(nodes[:, keep] / length)
         weight.append(np.full(int(keep.sum()), information))
         lengths.append(length)

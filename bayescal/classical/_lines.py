@@ -14,7 +14,9 @@ for the same way at sums of 4 and 16 neighbouring ordinates (F(2w', 2c), w' the 
 degrees of freedom under the taper's correlation of neighbouring ordinates). The ordinates
 from :data:`LOWEST_CYCLES` cycles per record to below Nyquist, at each scale, are M tests:
 an ordinate is a line when its p-value is below 1 - (1 - level)^(1/M) (Šidák), so that a
-record without lines shows one with probability ``level`` (:data:`LINE_LEVEL`, 0.1 %).
+record without lines shows one with probability ``level`` (:data:`LINE_LEVEL`, 0.1 %). A floor
+too far below the record's power to be resolved (13 decades: a digital filter's stop band with
+nothing added after it) tests nothing there.
 
 **Estimates.** Found lines are fitted jointly by least squares to the increments (weighted by
 the taper squared, a constant beside them): y_t = a sin(2 pi f t) + b cos(2 pi f t) per line

@@ -870,16 +870,22 @@ def _check_constant_and_rail(
             column=column,
             fix="check the column and that the sensor was recording",
         )
-    deviations = np.abs(values - median)
-    spread = 1.4826 * np.median(deviations, overwrite_input=True) or np.std(values)
+    spread = None
     for rail in (largest, smallest):
-        if abs(rail - median) <= RAIL_SIGMAS * spread:
+        at_rail = values == rail
+        if np.count_nonzero(at_rail) < _RAIL_RUN:  # too few for a run: most records' extremes
             continue
-        at_rail = np.concatenate(([0], (values == rail).astype(np.int8), [0]))
-        edges = np.flatnonzero(np.diff(at_rail))
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], at_rail.astype(np.int8), [0]))))
         runs = edges[1::2] - edges[::2]
         long_runs = np.flatnonzero(runs >= _RAIL_RUN)
-        if long_runs.size:
+        if not long_runs.size:
+            continue
+        # The spread (a median of the record) only where a run at the rail asks whether
+        # that rail is far outside it: most records have none.
+        if spread is None:
+            deviations = np.abs(values - median)
+            spread = 1.4826 * np.median(deviations, overwrite_input=True) or np.std(values)
+        if abs(rail - median) > RAIL_SIGMAS * spread:
             first = offset + int(edges[::2][long_runs[0]])
             raise InputError(
                 f"stuck at a rail: {int(runs[long_runs[0]])} consecutive samples at {rail:g} "
@@ -888,6 +894,20 @@ def _check_constant_and_rail(
                 column=column,
                 fix="exclude the saturated part with start=/stop=",
             )
+
+
+def _no_sample_far(values: np.ndarray, extremes, median: float) -> bool:
+    """True when no sample can be more than GLITCH_SIGMAS noise sd (:func:`_noise_sd`) from
+    ``median``, shown without the median of the steps: if more than half the steps are at
+    least t, that median is at least t, and the sd at least 1.4826 t / sqrt(2); t is the
+    smallest step for which that sd puts the extremes within GLITCH_SIGMAS of it. False: it
+    takes the sd itself to tell."""
+    farthest = max(extremes[1] - median, median - extremes[0])
+    least = farthest * np.sqrt(2) / (GLITCH_SIGMAS * 1.4826)
+    if values.size < 2 or not GLITCH_SIGMAS * (1.4826 * least / np.sqrt(2)) >= farthest:
+        return False
+    steps = np.diff(values)
+    return np.count_nonzero(np.abs(steps, out=steps) >= least) >= steps.size // 2 + 1
 
 
 def _noise_sd(values: np.ndarray) -> float:
@@ -903,9 +923,11 @@ def _noise_sd(values: np.ndarray) -> float:
     return max(sd, 0.5 * smallest)
 
 
-def _check_glitches(values, median: float, place: _Place, offset, source, column, unit):
+def _check_glitches(values, extremes, median: float, place: _Place, offset, source, column, unit):
     """Samples thousands of noise sd from the record's median in runs too short to be a
     pose, a rail or a motion: glitches (a logger's error code, a bit flip)."""
+    if _no_sample_far(values, extremes, median):
+        return
     sd = _noise_sd(values)
     if sd == 0:
         return
@@ -1178,7 +1200,9 @@ def prepare_channel(
         checked, extremes, median, place, first, table.source, channel, resolved_unit
     )
     if at_rest:
-        _check_glitches(checked, median, place, first, table.source, channel, resolved_unit)
+        _check_glitches(
+            checked, extremes, median, place, first, table.source, channel, resolved_unit
+        )
     notes.extend(
         _static_plausibility(median, resolved_unit, how, scale is not None, table.source, channel)
     )

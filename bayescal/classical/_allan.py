@@ -28,7 +28,7 @@ import numpy as np
 
 from .._errors import InputError
 from ..recording._inputs import samples_and_rate
-from ..recording._series import BLOCK, blocks, gap_free_runs, is_spooled, read
+from ..recording._series import blocks, gap_free_runs, is_spooled, read
 from ._edf import (
     _LAG1_MAX_POINTS,
     deviation_interval,
@@ -384,15 +384,16 @@ class _SpooledPhase:
     def fill(self, start: int, phase: np.ndarray, missing: np.ndarray) -> None:
         """Write phase points ``start``, ``start + 1`` ... into ``phase`` (as many as it
         holds) and their running counts of missing samples into ``missing`` (when any are
-        missing), integrating a block of samples at a time from the block ``start`` is in."""
+        missing), integrating again block by block from the block ``start`` is in."""
         stop = start + phase.size
         block = bisect.bisect_right(self.firsts, start) - 1
-        position, (running, gaps) = self.firsts[block], self.states[block]
+        running, gaps = self.states[block]
         while True:
-            size = min(BLOCK, stop - 1 - position)  # samples, giving points to position + size
+            position = self.firsts[block]
+            end = min(stop - 1, self.firsts[block + 1] if block + 1 < len(self.firsts) else stop)
             skip = max(0, start - position)
             points, counts = _phase_points(
-                read(self.y, position, position + size),
+                read(self.y, position, end),
                 self.mean,
                 self.period,
                 running,
@@ -403,10 +404,10 @@ class _SpooledPhase:
             at = position + skip - start
             phase[at : at + points.size] = points
             missing[at : at + counts.size] = counts
-            if position + size == stop - 1:
+            if end == stop - 1:
                 return
-            position += size
-            running, gaps = points[-1], (int(counts[-1]) if self.gapped else 0)
+            block += 1
+            running, gaps = self.states[block]
 
 
 def _spooled_difference_sums(phase: _SpooledPhase, factors, order, overlapping):

@@ -202,10 +202,11 @@ def series_size(values) -> int:
 
 
 def blocks(
-    values, length: int = BLOCK, start: int = 0, stop: int | None = None
+    values, length: int | None = None, start: int = 0, stop: int | None = None
 ) -> Iterator[tuple[int, np.ndarray]]:
     """(first index, block) over ``values[start:stop]`` — views of an array, fresh reads of
-    a spooled series — each block at most ``length`` samples."""
+    a spooled series — each block at most ``length`` samples (:data:`BLOCK` by default)."""
+    length = BLOCK if length is None else length
     stop = series_size(values) if stop is None else min(stop, series_size(values))
     for first in range(start, stop, length):
         last = min(stop, first + length)

@@ -17,6 +17,7 @@ samples: terms that would span one are left out (the gap-tolerant estimator), wh
 ``--gaps split`` pools the segments of a recording without bridging its gaps.
 """
 
+import bisect
 import functools
 import math
 from dataclasses import dataclass
@@ -27,13 +28,7 @@ import numpy as np
 
 from .._errors import InputError
 from ..recording._inputs import samples_and_rate
-from ..recording._series import (
-    SpoolWriter,
-    blocks,
-    gap_free_runs,
-    is_spooled,
-    read,
-)
+from ..recording._series import blocks, gap_free_runs, is_spooled, read
 from ._edf import (
     _LAG1_MAX_POINTS,
     deviation_interval,
@@ -271,35 +266,54 @@ def _longest_complete_run(phase_lane: np.ndarray, missing_lane: np.ndarray) -> n
 
 
 @numba.njit(parallel=True, cache=True)
-def _window_sums(span, missing, lags, steps, order, first, counts_):  # pragma: no cover
+def _window_sums(span, missing, points, steps, order, first, counts_, lanes):  # pragma: no cover
     """As :func:`_difference_sums` for the terms k = first .. first + count - 1 of one lane
-    (``counts_``: the count for each lag): term k reads span[k - first + j * lag]
-    (j = 0 .. order), every step-th k of the record; ``missing`` (empty: none) is laid out as
-    ``span``."""
-    sums = np.zeros(lags.size)
-    counts = np.zeros(lags.size, dtype=np.int64)
+    (``counts_``: the count for each factor): term k of a factor reads span[k + p] for each
+    of its points p (``points``: (factors, order + 1), where its terms' j-th phase point
+    starts in ``span``), every step-th k of the record; ``missing`` (empty: none) is laid out
+    as ``span``. The terms are taken a stretch of the record at a time, every factor's over
+    that stretch before the next: the stretch's phase points stay in the cache for all the
+    factors, not only the one (each factor's sum still runs over its terms in order);
+    ``lanes`` (the threads) share out the factors."""
+    n_factors = points.shape[0]
+    sums = np.zeros(n_factors)
+    counts = np.zeros(n_factors, dtype=np.int64)
     gapped = missing.size > 0
-    for index in numba.prange(lags.size):
-        lag = lags[index]
-        step = steps[index]
-        total = 0.0
-        terms = 0
-        for k in range((-first) % step, counts_[index], step):
-            if gapped and missing[k + order * lag] != missing[k]:
-                continue
-            if order == 2:
-                value = span[k + 2 * lag] - 2.0 * span[k + lag] + span[k]
-            else:
-                value = span[k + 3 * lag] - 3.0 * span[k + 2 * lag] + 3.0 * span[k + lag] - span[k]
-            total += value * value
-            terms += 1
-        sums[index] = total
-        counts[index] = terms
+    longest = 0
+    for index in range(n_factors):
+        longest = max(longest, counts_[index])
+    for lane in numba.prange(lanes):
+        for low in range(0, longest, _STRETCH):
+            for index in range(lane, n_factors, lanes):
+                step = steps[index]
+                p0, p1, p2 = points[index, 0], points[index, 1], points[index, 2]
+                p3 = points[index, order]
+                total = sums[index]
+                terms = counts[index]
+                for k in range(
+                    low + (-first - low) % step, min(low + _STRETCH, counts_[index]), step
+                ):
+                    if gapped and missing[k + p3] != missing[k + p0]:
+                        continue
+                    if order == 2:
+                        value = span[k + p2] - 2.0 * span[k + p1] + span[k + p0]
+                    else:
+                        value = (
+                            span[k + p3] - 3.0 * span[k + p2] + 3.0 * span[k + p1] - span[k + p0]
+                        )
+                    total += value * value
+                    terms += 1
+                sums[index] = total
+                counts[index] = terms
     return sums, counts
 
 
+_STRETCH = 1 << 13
+"""Terms of each factor per stretch in :func:`_window_sums` (the stretches of a few tens of
+factors' points fit in a core's cache)."""
 _SPAN_BLOCK = 1 << 22
-"""Terms per pass of the blocked sums over a spooled phase (32 MB a window)."""
+"""Terms per window of the sums over a spooled phase: 32 MB of phase points per window a
+factor's terms read, these joined where they touch (octave factors of 10^8 samples: 160 MB)."""
 
 
 @numba.njit(cache=True)
@@ -314,87 +328,131 @@ def _sum_present(block, total, present):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _integrate_block(block, mean, period, running, gaps):  # pragma: no cover - compiled
-    """:func:`_integrate` carried on over one block: its phase points and running counts of
-    missing samples, and the running phase and count at its end."""
-    phase = np.empty(block.size)
-    missing = np.empty(block.size)
-    for k in range(block.size):
-        if np.isnan(block[k]):
-            gaps += 1
-        else:
-            running += (block[k] - mean) * period
-        phase[k] = running
-        missing[k] = gaps
-    return phase, missing, running, gaps
+def _phase_points(block, mean, period, running, gaps, skip, with_missing):  # pragma: no cover
+    """:func:`_integrate` carried on over one block from the running phase and count of
+    missing samples before it: its phase points and counts from the skip-th on (the first,
+    at index 0, is the one before the block; the last the one after it)."""
+    phase = np.empty(block.size + 1 - skip)
+    missing = np.empty(block.size + 1 - skip if with_missing else 0)
+    for k in range(block.size + 1):
+        if k >= skip:
+            phase[k - skip] = running
+            if with_missing:
+                missing[k - skip] = gaps
+        if k < block.size:
+            if np.isnan(block[k]):
+                gaps += 1
+            else:
+                running += (block[k] - mean) * period
+    return phase, missing
 
 
-def _spooled_phase(y, rate: float):
-    """The phase of a spooled rate series and the running count of missing samples, both
-    spooled (the latter None when nothing is missing): :func:`_integrate`'s arithmetic, in
-    its order, so the phase is the in-memory one to the last bit."""
-    total, present = 0.0, 0
-    for _, block in blocks(y):
-        total, present = _sum_present(block, total, present)
-    mean = total / max(present, 1)
-    phase = SpoolWriter(name="phase")
-    missing = SpoolWriter(phase.folder, name="missing") if present < y.size else None
-    phase.append([0.0])
-    if missing is not None:
-        missing.append([0.0])
-    running, gaps = 0.0, 0
-    for _, block in blocks(y):
-        points, counts, running, gaps = _integrate_block(block, mean, 1.0 / rate, running, gaps)
-        phase.append(points)
-        if missing is not None:
-            missing.append(counts)
-    return phase.finish(), (None if missing is None else missing.finish())
+class _SpooledPhase:
+    """The phase of a spooled rate series, and the running count of its missing samples,
+    read in windows: integrated once, keeping the running phase and count where each block
+    of the series begins, a window is integrated again from the block it begins in. The
+    arithmetic is :func:`_integrate`'s in its order, so every point is the in-memory one to
+    the last bit, and nothing the size of the record is written.
+
+    ``picks``: (start, stop, step) of phase points to keep from the first integration
+    (:attr:`picked`, in that order): the decimated phase the noise identification reads."""
+
+    def __init__(self, y, rate: float, picks=()):
+        total, present = 0.0, 0
+        for _, block in blocks(y):
+            total, present = _sum_present(block, total, present)
+        self.y, self.size = y, y.size + 1
+        self.mean, self.period = total / max(present, 1), 1.0 / rate
+        self.gapped = present < y.size
+        self.firsts, self.states = [], []
+        picked = [[] for _ in picks]
+        running, gaps = 0.0, 0
+        for first, block in blocks(y):
+            self.firsts.append(first)
+            self.states.append((running, gaps))
+            phase, missing = _phase_points(
+                block, self.mean, self.period, running, gaps, 0, self.gapped
+            )
+            running, gaps = phase[-1], (int(missing[-1]) if self.gapped else 0)
+            end = first + block.size + (1 if first + block.size == y.size else 0)
+            for kept, (start, stop, step) in zip(picked, picks, strict=True):
+                low = max(start, first)
+                low += (start - low) % step
+                kept.append(phase[low - first : max(0, min(stop, end) - first) : step].copy())
+        self.picked = [np.concatenate(kept) for kept in picked]
+
+    def fill(self, start: int, phase: np.ndarray, missing: np.ndarray) -> None:
+        """Write phase points ``start``, ``start + 1`` ... into ``phase`` (as many as it
+        holds) and their running counts of missing samples into ``missing`` (when any are
+        missing), integrating again block by block from the block ``start`` is in."""
+        stop = start + phase.size
+        block = bisect.bisect_right(self.firsts, start) - 1
+        running, gaps = self.states[block]
+        while True:
+            position = self.firsts[block]
+            end = min(stop - 1, self.firsts[block + 1] if block + 1 < len(self.firsts) else stop)
+            skip = max(0, start - position)
+            points, counts = _phase_points(
+                read(self.y, position, end),
+                self.mean,
+                self.period,
+                running,
+                gaps,
+                skip,
+                self.gapped,
+            )
+            at = position + skip - start
+            phase[at : at + points.size] = points
+            missing[at : at + counts.size] = counts
+            if end == stop - 1:
+                return
+            block += 1
+            running, gaps = self.states[block]
 
 
-def _spooled_difference_sums(phase, missing, factors, order, overlapping):
-    """:func:`_difference_sums` of one spooled phase, block by block: the factors whose span
-    fits beside a block share one read of it; a longer one reads its order + 1 windows and
-    lays them side by side (the record between them is not needed)."""
+def _spooled_difference_sums(phase: _SpooledPhase, factors, order, overlapping):
+    """:func:`_difference_sums` of one spooled phase, a window of terms at a time: the phase
+    points every factor's terms in the window read, the windows (one per factor and point)
+    joined where they touch, read once and laid side by side (the record between them is
+    not needed); the sum of each factor over a window added to its total in order."""
     length = phase.size
     sums = np.zeros(factors.size)
     counts = np.zeros(factors.size, dtype=np.int64)
     steps = np.ones_like(factors) if overlapping else factors.astype(np.int64)
     reach = order * factors.astype(np.int64)  # phase points a term spans, less one
-    short = np.flatnonzero(reach <= _SPAN_BLOCK)
-    groups = [short] if short.size else []
-    groups += [np.array([i]) for i in np.flatnonzero(reach > _SPAN_BLOCK)]
-    for members in groups:
-        alone = reach[members[0]] > _SPAN_BLOCK
-        for first in range(0, length - int(reach[members].min()), _SPAN_BLOCK):
-            terms = np.clip(length - reach[members] - first, 0, _SPAN_BLOCK)
-            if alone:
-                offsets = np.arange(order + 1) * int(factors[members[0]])
-                span = _side_by_side(phase, first, int(terms[0]), offsets)
-                gaps = _side_by_side(missing, first, int(terms[0]), offsets) if missing else None
-                lags = terms.astype(np.int64)
+    for first in range(0, length - int(reach.min()), _SPAN_BLOCK):
+        terms = np.clip(length - reach - first, 0, _SPAN_BLOCK)
+        active = np.flatnonzero(terms > 0)
+        offsets = np.arange(order + 1) * factors[active, None].astype(np.int64)
+        width = int(terms.max())
+        windows = []  # [low, high) of the phase points read, after first
+        for low in np.unique(offsets).tolist():
+            high = min(low + width, length - first)  # the last window's run to the end
+            if windows and low <= windows[-1][1]:
+                windows[-1][1] = high
             else:
-                stop = min(length, first + _SPAN_BLOCK + int(reach[members].max()))
-                span = read(phase, first, stop)
-                gaps = read(missing, first, stop) if missing else None
-                lags = factors[members].astype(np.int64)
-            part, made = _window_sums(
-                span,
-                np.zeros(0) if gaps is None else gaps,
-                lags,
-                steps[members],
-                order,
-                first,
-                terms,
-            )
-            sums[members] += part
-            counts[members] += made
+                windows.append([low, high])
+        sizes = [high - low for low, high in windows]
+        starts = np.cumsum([0, *sizes])
+        span = np.empty(starts[-1])
+        gaps = np.empty(starts[-1] if phase.gapped else 0)
+        for (low, high), at in zip(windows, starts[:-1].tolist(), strict=True):
+            phase.fill(first + low, span[at : at + high - low], gaps[at : at + high - low])
+        lows = np.array([low for low, _ in windows])
+        window = np.searchsorted(lows, offsets, side="right") - 1
+        part, made = _window_sums(
+            span,
+            gaps,
+            (starts[window] + offsets - lows[window]).astype(np.int64),
+            steps[active],
+            order,
+            first,
+            terms[active],
+            numba.get_num_threads(),
+        )
+        sums[active] += part
+        counts[active] += made
     return sums[None, :], counts[None, :]
-
-
-def _side_by_side(series, first: int, count: int, offsets) -> np.ndarray:
-    """The windows series[first + o : first + o + count] for each offset o, one after the
-    other: on it, a lag of ``count`` samples is the lag between the windows."""
-    return np.concatenate([read(series, first + o, first + o + count) for o in offsets])
 
 
 def _lane_exponents(exponent_at, size: int, factors) -> list[int]:
@@ -410,30 +468,29 @@ def _spooled_lanes(estimator, y, rate, taus, noise_type, max_differences):
             "y: the modified Allan deviation of a spooled (long) record is not computed",
             fix="use allan_deviation or hadamard_deviation, or a record that fits in memory",
         )
-    phase, missing = _spooled_phase(y, float(rate))
-    n_phase = phase.size
+    n_phase = y.size + 1
     longest = (n_phase - 1) // estimator.order
     if longest < 1:
         raise InputError(f"y: {y.size} samples are too few for a {estimator.name}")
     factors = averaging_factors(taus, n_phase, float(rate), longest=longest)
-    sums, counts = _spooled_difference_sums(
-        phase, missing, factors, estimator.order, estimator.overlapping
-    )
-    exponents = None
+    picks, size = (), 0
     if noise_type == "auto":
         runs = gap_free_runs(y)
         start, stop = runs[np.argmax(runs[:, 1] - runs[:, 0])]
-        size = stop - start + 1  # phase points of the run
-        # The run's phase read decimated, as much of it as the lag-1 method reads: the same
-        # points the in-memory path uses. Only below 30 averages, where the R(n) ratio of
-        # phase noise would need the undecimated phase, is it taken on the decimated one.
+        size = int(stop - start + 1)  # phase points of the run
+        # The run's phase decimated, as much of it as the lag-1 method reads: the same points
+        # the in-memory path uses, kept while the phase is integrated. Only below 30
+        # averages, where the R(n) ratio of phase noise would need the undecimated phase, is
+        # it taken on the decimated one.
+        picks = [(start, start + min(size, m * _LAG1_MAX_POINTS), m) for m in factors.tolist()]
+    phase = _SpooledPhase(y, float(rate), picks)
+    sums, counts = _spooled_difference_sums(phase, factors, estimator.order, estimator.overlapping)
+    exponents = None
+    if noise_type == "auto":
+        decimated = dict(zip(factors.tolist(), phase.picked, strict=True))
         exponents = [
             _lane_exponents(
-                lambda m: identify_noise_exponent(
-                    read(phase, start, start + min(size, m * _LAG1_MAX_POINTS), m),
-                    1,
-                    max_differences=max_differences,
-                ),
+                lambda m: identify_noise_exponent(decimated[m], 1, max_differences=max_differences),
                 size,
                 factors,
             )

@@ -398,15 +398,21 @@ def _increment_sums(values) -> dict:
         joined = np.concatenate((carry, block))
         increments = np.diff(joined)
         present = np.isfinite(increments)
-        new = present.copy()
-        new[: max(carry.size - 1, 0)] = False  # counted with the block before
-        sums["count"] += np.count_nonzero(new)
-        sums["sum"] += float(np.sum(increments[new]))
-        sums["squares"] += float(np.sum(increments[new] ** 2))
-        pairs = present[1:] & present[:-1]
-        sums["pairs"] += np.count_nonzero(pairs)
-        sums["pair_sum"] += float(np.sum(increments[1:][pairs] + increments[:-1][pairs]))
-        sums["pair_products"] += float(np.sum(increments[1:][pairs] * increments[:-1][pairs]))
+        counted = max(carry.size - 1, 0)  # counted with the block before
+        if present.all():  # slices, not masks: the same samples in the same order
+            new, later, earlier = increments[counted:], increments[1:], increments[:-1]
+        else:
+            present_new = present.copy()
+            present_new[:counted] = False
+            pairs = present[1:] & present[:-1]
+            new = increments[present_new]
+            later, earlier = increments[1:][pairs], increments[:-1][pairs]
+        sums["count"] += new.size
+        sums["sum"] += float(np.sum(new))
+        sums["squares"] += float(np.sum(new**2))
+        sums["pairs"] += later.size
+        sums["pair_sum"] += float(np.sum(later + earlier))
+        sums["pair_products"] += float(np.sum(later * earlier))
         carry = joined[-2:]
     sums["pairs"] = int(sums["pairs"])
     return sums

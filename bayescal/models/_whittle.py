@@ -253,44 +253,13 @@ def _expected_computed(
 def _extra_expected(length: int, taper_fraction: float, index, components) -> np.ndarray:
     """As :func:`_expected_periodogram` for ``components`` (functions lags -> increment
     autocovariance), all lags each."""
+    if not components:
+        return np.zeros((0, len(index)))
     taper, autocorrelation = _taper(length, taper_fraction)
     lags = np.arange(length)
     return np.array(
         [_all_lags_expected(c(lags), autocorrelation, np.asarray(index)) for c in components]
     ).reshape(len(components), len(index)) / np.sum(taper**2)
-
-
-def _binning(length: int, bin_width: float) -> tuple:
-    """The bins of a segment of ``length`` increments: their first and last-plus-one
-    frequency indices, sizes, every frequency's u (log cycles per sample), the hat functions
-    (:func:`_hats`) and each node's count (the sum of its hat). They depend on the length
-    alone: kept for lengths up to :data:`KEPT_FREQUENCIES` frequencies (the hats of 2^20
-    samples, 12 MB, took 50-70 ms of each fit of a notebook's record); longer ones are
-    computed, their hats too large to keep."""
-    if (length - 1) // 2 <= KEPT_FREQUENCIES:
-        return _kept_binning(length, bin_width)
-    return _computed_binning(length, bin_width)
-
-
-KEPT_FREQUENCIES = 2**20
-"""The most frequencies of a segment whose bins :func:`_binning` keeps (hats of 24 MB)."""
-
-
-def _computed_binning(length: int, bin_width: float) -> tuple:
-    """:func:`_binning`, computed."""
-    n_frequencies = (length - 1) // 2
-    edges = _bin_edges(n_frequencies, bin_width)
-    lows, highs = edges[:-1], edges[1:]
-    counts = highs - lows
-    u = np.log(np.arange(1, n_frequencies + 1) / length)
-    hats = _hats(u, lows, counts)
-    node_count = _bin_sums(np.ones_like(u), hats, lows - 1)
-    for array in (lows, highs, counts, u, hats, node_count):
-        array.setflags(write=False)
-    return lows, highs, counts, u, hats, node_count
-
-
-_kept_binning = functools.lru_cache(maxsize=2)(_computed_binning)
 
 
 def _hats(u: np.ndarray, lows: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -317,6 +286,64 @@ def _bin_sums(per_frequency: np.ndarray, hats: np.ndarray, starts: np.ndarray) -
             np.moveaxis(np.add.reduceat(per_frequency * hat.reshape(shape), starts), 0, -1)
             for hat in hats
         ]
+    )
+
+
+@dataclasses.dataclass(frozen=True)
+class _Layout:
+    """What a segment's summary takes from its length alone (taper, bins, hats, nodes), the
+    same for every segment of that length: a long record's equal pieces share one."""
+
+    taper: np.ndarray
+    taper_sum: float
+    norm: float
+    """sum h^2."""
+    information: float
+    """1 / kappa (module docstring)."""
+    n_frequencies: int
+    lows: np.ndarray
+    hats: np.ndarray
+    """(3, frequencies): :func:`_hats`, zero at the excluded frequencies."""
+    keep: np.ndarray
+    """The bins left with a frequency."""
+    index: tuple[int, ...]
+    """0, then the bins' nodes (first, middle, last), as Fourier indices."""
+    count: np.ndarray
+    frequency_hz: np.ndarray
+    node_count: np.ndarray
+    node_frequency: np.ndarray
+
+
+@functools.lru_cache(maxsize=4)
+def _layout(
+    length: int, rate_hz: float, taper_fraction: float, bin_width: float, exclude: tuple
+) -> _Layout:
+    """The :class:`_Layout` of a segment of ``length`` increments (cached)."""
+    taper, _ = _taper(length, taper_fraction)
+    n_frequencies = (length - 1) // 2
+    edges = _bin_edges(n_frequencies, bin_width)
+    lows, highs = edges[:-1], edges[1:]
+    counts = highs - lows
+    u = np.log(np.arange(1, n_frequencies + 1) / length)
+    present = _outside(np.arange(1, n_frequencies + 1) * rate_hz / length, exclude)
+    hats = _hats(u, lows, counts) * present
+    kept = np.add.reduceat(present, lows - 1)
+    keep = kept > 0
+    nodes = np.stack([lows, (lows + highs - 1) // 2, highs - 1])  # (3, bins)
+    return _Layout(
+        taper=taper,
+        taper_sum=taper.sum(),
+        norm=np.sum(taper**2),
+        information=np.sum(taper**2) ** 2 / (length * np.sum(taper**4)),
+        n_frequencies=n_frequencies,
+        lows=lows,
+        hats=hats,
+        keep=keep,
+        index=(0, *nodes.ravel().tolist()),
+        count=kept[keep].astype(int),
+        frequency_hz=(np.exp(np.add.reduceat(u, lows - 1) / counts) * rate_hz)[keep],
+        node_count=_bin_sums(np.ones_like(u), hats, lows - 1)[:, keep],
+        node_frequency=nodes[:, keep] / length,
     )
 
 
@@ -349,69 +376,60 @@ def spectral_summary(
     if is_spooled(values) and regressors is not None:
         raise InputError("regressors: a spooled (long) record is summarised without them")
     values = values if is_spooled(values) else np.asarray(values, dtype=float)
+    exclude = tuple(tuple(float(edge) for edge in band) for band in exclude)
     for start, stop in _segment_bounds(values, MIN_INCREMENTS):
         increments = np.diff(read(values, start, stop))
         increments = increments[: fast_length_at_most(increments.size)]
         length = increments.size
-        taper, _ = _taper(length, taper_fraction)
-        mean = float(np.dot(taper, increments) / taper.sum())
-        information = np.sum(taper**2) ** 2 / (length * np.sum(taper**4))
+        layout = _layout(length, float(rate_hz), taper_fraction, bin_width, exclude)
+        taper, lows, keep = layout.taper, layout.lows, layout.keep
+        mean = float(np.dot(taper, increments) / layout.taper_sum)
         transform = fft.rfft(taper * (increments - mean))
-        norm = np.sum(taper**2)
-        periodogram = np.abs(transform) ** 2 / norm
-        n_frequencies = (length - 1) // 2
-        binning = _binning(length, bin_width)
-        lows, highs, counts, u, hats, node_count = binning
-        present = _outside(np.arange(1, n_frequencies + 1) * rate_hz / length, exclude)
-        if not present.all():
-            hats = hats * present
-            node_count = _bin_sums(np.ones_like(u), hats, lows - 1)
-        kept = np.add.reduceat(present, lows - 1)
-        keep = kept > 0
+        periodogram = np.abs(transform) ** 2 / layout.norm
+        n_frequencies = layout.n_frequencies
         if regressors is not None:
             x_increments = np.diff(regressors[start:stop], axis=0)[:length]
-            x_mean = taper @ x_increments / taper.sum()
+            x_mean = taper @ x_increments / layout.taper_sum
             x_transform = fft.rfft(taper[:, None] * (x_increments - x_mean), axis=0)
             y_part = transform[1 : n_frequencies + 1]
             x_part = x_transform[1 : n_frequencies + 1]
             real, imaginary = x_part.real, x_part.imag
             cross.append(
                 _bin_sums(
-                    y_part.real[:, None] * real + y_part.imag[:, None] * imaginary, hats, lows - 1
+                    y_part.real[:, None] * real + y_part.imag[:, None] * imaginary,
+                    layout.hats,
+                    lows - 1,
                 )[..., keep]
-                / norm
+                / layout.norm
             )
             gram.append(
                 _bin_sums(
                     real[:, :, None] * real[:, None, :]
                     + imaginary[:, :, None] * imaginary[:, None, :],
-                    hats,
+                    layout.hats,
                     lows - 1,
                 )[..., keep]
-                / norm
+                / layout.norm
             )
             mean_regressor.append(x_mean)
-        nodes = np.stack([lows, (lows + highs - 1) // 2, highs - 1])  # (3, bins)
-        index = (0, *nodes.ravel().tolist())
         expected = np.concatenate(
             (
                 _expected_periodogram(
-                    length, float(rate_hz), taper_fraction, index, components.shapes
+                    length, float(rate_hz), taper_fraction, layout.index, components.shapes
                 ),
-                _extra_expected(length, taper_fraction, index, extra_components),
+                _extra_expected(length, taper_fraction, layout.index, extra_components),
             )
         )
         mean_increment.append(mean)
-        mean_basis.append(expected[:, 0] * norm / taper.sum() ** 2)
+        mean_basis.append(expected[:, 0] * layout.norm / layout.taper_sum**2)
         basis.append(expected[:, 1:].reshape(expected.shape[0], 3, -1)[..., keep])
-        parts["count"].append(kept[keep].astype(int))
-        frequency = np.exp(np.add.reduceat(u, lows - 1) / counts) * rate_hz
-        parts["frequency_hz"].append(frequency[keep])
-        power = _bin_sums(periodogram[1 : n_frequencies + 1], hats, lows - 1)
+        parts["count"].append(layout.count)
+        parts["frequency_hz"].append(layout.frequency_hz)
+        power = _bin_sums(periodogram[1 : n_frequencies + 1], layout.hats, lows - 1)
         parts["node_power"].append(power[:, keep])
-        parts["node_count"].append(node_count[:, keep])
-        parts["node_frequency"].append(nodes[:, keep] / length)
-        weight.append(np.full(int(keep.sum()), information))
+        parts["node_count"].append(layout.node_count)
+        parts["node_frequency"].append(layout.node_frequency)
+        weight.append(np.full(int(keep.sum()), layout.information))
         lengths.append(length)
     if not parts["count"]:
         raise InputError(

@@ -64,7 +64,7 @@ def _floats(column) -> np.ndarray:
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    out = np.full(len(column), np.nan)
+    out = np.empty(len(column))  # every sample written below: a value, or NaN
     start = 0
     for chunk in pc.cast(column, pa.float64(), safe=False).chunks:
         size = len(chunk)
@@ -72,6 +72,8 @@ def _floats(column) -> np.ndarray:
         if data is not None:
             values = np.frombuffer(data, np.float64, count=chunk.offset + size)[chunk.offset :]
             out[start : start + size] = values
+        else:
+            out[start : start + size] = np.nan
         if chunk.null_count and validity is not None:
             bits = np.unpackbits(np.frombuffer(validity, np.uint8), bitorder="little")
             out[start : start + size][bits[chunk.offset : chunk.offset + size] == 0] = np.nan

@@ -32,6 +32,7 @@ the input is odd but may be meant):
   in their place on the grid (a time column's stamps or an even rate alike).
 """
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -859,9 +860,9 @@ def _check_magnitude(values, extremes, place: _Place, offset, source, column, un
         )
 
 
-def _check_constant_and_rail(
-    values, extremes, median: float, place: _Place, offset, source, column, unit
-):
+def _check_constant_and_rail(values, extremes, median, place: _Place, offset, source, column, unit):
+    """A constant channel, or a run of samples at a rail far outside the rest (saturation);
+    ``median()``: the record's median."""
     smallest, largest = extremes
     if largest == smallest:
         raise InputError(
@@ -870,16 +871,22 @@ def _check_constant_and_rail(
             column=column,
             fix="check the column and that the sensor was recording",
         )
-    deviations = np.abs(values - median)
-    spread = 1.4826 * np.median(deviations, overwrite_input=True) or np.std(values)
+    spread = None
     for rail in (largest, smallest):
-        if abs(rail - median) <= RAIL_SIGMAS * spread:
+        at_rail = values == rail
+        if np.count_nonzero(at_rail) < _RAIL_RUN:  # too few for a run: most records' extremes
             continue
-        at_rail = np.concatenate(([0], (values == rail).astype(np.int8), [0]))
-        edges = np.flatnonzero(np.diff(at_rail))
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], at_rail.astype(np.int8), [0]))))
         runs = edges[1::2] - edges[::2]
         long_runs = np.flatnonzero(runs >= _RAIL_RUN)
-        if long_runs.size:
+        if not long_runs.size:
+            continue
+        # The spread (a median of the record) only where a run at the rail asks whether
+        # that rail is far outside it: most records have none.
+        if spread is None:
+            deviations = np.abs(values - median())
+            spread = 1.4826 * np.median(deviations, overwrite_input=True) or np.std(values)
+        if abs(rail - median()) > RAIL_SIGMAS * spread:
             first = offset + int(edges[::2][long_runs[0]])
             raise InputError(
                 f"stuck at a rail: {int(runs[long_runs[0]])} consecutive samples at {rail:g} "
@@ -888,6 +895,21 @@ def _check_constant_and_rail(
                 column=column,
                 fix="exclude the saturated part with start=/stop=",
             )
+
+
+def _no_sample_far(values: np.ndarray, extremes) -> bool:
+    """True when no sample can be more than GLITCH_SIGMAS noise sd (:func:`_noise_sd`) from
+    the record's median, shown without a median: none is farther from it than the extremes
+    are apart, and if more than half the steps are at least t, their median is at least t
+    and the sd at least 1.4826 t / sqrt(2); t is the smallest step for which that sd puts
+    the extremes' distance within GLITCH_SIGMAS of it. False: it takes the medians to tell."""
+    farthest = extremes[1] - extremes[0]
+    # A part in 10^9 above: the rounding of the sd's arithmetic then never undoes the bound.
+    least = farthest * np.sqrt(2) / (GLITCH_SIGMAS * 1.4826) * (1 + 1e-9)
+    if values.size < 2 or not GLITCH_SIGMAS * (1.4826 * least / np.sqrt(2)) >= farthest:
+        return False
+    steps = np.diff(values)
+    return np.count_nonzero(np.abs(steps, out=steps) >= least) >= steps.size // 2 + 1
 
 
 def _noise_sd(values: np.ndarray) -> float:
@@ -903,13 +925,16 @@ def _noise_sd(values: np.ndarray) -> float:
     return max(sd, 0.5 * smallest)
 
 
-def _check_glitches(values, median: float, place: _Place, offset, source, column, unit):
-    """Samples thousands of noise sd from the record's median in runs too short to be a
-    pose, a rail or a motion: glitches (a logger's error code, a bit flip)."""
+def _check_glitches(values, extremes, median, place: _Place, offset, source, column, unit):
+    """Samples thousands of noise sd from the record's median (``median()``) in runs too
+    short to be a pose, a rail or a motion: glitches (a logger's error code, a bit flip)."""
+    if _no_sample_far(values, extremes):
+        return
+    level = median()
     sd = _noise_sd(values)
     if sd == 0:
         return
-    far = np.abs(values - median) > GLITCH_SIGMAS * sd
+    far = np.abs(values - level) > GLITCH_SIGMAS * sd
     if not far.any():
         return
     edges = np.flatnonzero(np.diff(np.concatenate(([0], far.astype(np.int8), [0]))))
@@ -921,7 +946,7 @@ def _check_glitches(values, median: float, place: _Place, offset, source, column
     count = int(runs[short].sum())
     raise InputError(
         f"{count} glitch sample(s) more than {GLITCH_SIGMAS:g} noise sd from the rest "
-        f"(median {median:.6g} {unit}, noise sd {sd:.3g}), first {values[first]:.6g} {unit} "
+        f"(median {level:.6g} {unit}, noise sd {sd:.3g}), first {values[first]:.6g} {unit} "
         f"at {place(offset + first)}",
         source=source,
         column=column,
@@ -930,22 +955,24 @@ def _check_glitches(values, median: float, place: _Place, offset, source, column
 
 
 def _static_plausibility(
-    level: float, unit: str, how: str, scaled: bool, source, column
+    extremes, median, unit: str, how: str, scaled: bool, source, column
 ) -> list[str]:
     """A reading no sensor at rest gives (hundreds of deg/s, tens of g) at the record's
-    median ``level``: raw counts, probably. An error when the unit was assumed, a note when
-    it was given."""
+    median (``median()``, asked only where the larger extreme exceeds the limit): raw counts,
+    probably. An error when the unit was assumed, a note when it was given."""
     parsed = parse_unit(unit)
     if parsed.quantity == "angular_rate":
-        reading, limit, label = abs(level) * parsed.to_si / DEG, STATIC_GYRO_LIMIT_DEG_S, "deg/s"
+        unit_si, limit, label = DEG, STATIC_GYRO_LIMIT_DEG_S, "deg/s"
         factor, per = "1/131", "131 LSB per deg/s"
     elif parsed.quantity == "acceleration":
-        reading = abs(level) * parsed.to_si / STANDARD_GRAVITY
-        limit, label = STATIC_ACCEL_LIMIT_G, "g"
+        unit_si, limit, label = STANDARD_GRAVITY, STATIC_ACCEL_LIMIT_G, "g"
         factor, per = "1/16384", "16384 LSB per g"
     else:
         return []
-    if reading <= limit:
+    if max(abs(extremes[0]), abs(extremes[1])) * parsed.to_si / unit_si <= limit:
+        return []
+    level = median()
+    if abs(level) * parsed.to_si / unit_si <= limit:
         return []
     problem = (
         f"reads {level:.6g} {unit} at its median, more than the {limit:g} {label} a sensor at "
@@ -1172,15 +1199,20 @@ def prepare_channel(
             )
     else:
         positions = None
-    # One median for the three checks: a pass over the record costs ~0.2 s at 10^7 samples.
-    median = float(np.median(checked))
+    # One median for the three checks, and only where one asks for it (~10 ms a million
+    # samples): each decides from the extremes, which bound it, where they can.
+    median = functools.cache(lambda: float(np.median(checked)))
     _check_constant_and_rail(
         checked, extremes, median, place, first, table.source, channel, resolved_unit
     )
     if at_rest:
-        _check_glitches(checked, median, place, first, table.source, channel, resolved_unit)
+        _check_glitches(
+            checked, extremes, median, place, first, table.source, channel, resolved_unit
+        )
     notes.extend(
-        _static_plausibility(median, resolved_unit, how, scale is not None, table.source, channel)
+        _static_plausibility(
+            extremes, median, resolved_unit, how, scale is not None, table.source, channel
+        )
     )
     notes.extend(_clipping_notes(checked, resolved_unit))
     grid = _on_grid(values[window], positions)

@@ -67,6 +67,7 @@ class SpooledSeries:
     def __init__(self, path: Path, size: int, folder: Path | None = None):
         self.path = Path(path)
         self.size = int(size)
+        self._statistics = {}  # name -> value (:func:`_once`): its samples never change
         self._cleanup = weakref.finalize(self, _remove, self.path, folder)
 
     @property
@@ -201,10 +202,11 @@ def series_size(values) -> int:
 
 
 def blocks(
-    values, length: int = BLOCK, start: int = 0, stop: int | None = None
+    values, length: int | None = None, start: int = 0, stop: int | None = None
 ) -> Iterator[tuple[int, np.ndarray]]:
     """(first index, block) over ``values[start:stop]`` — views of an array, fresh reads of
-    a spooled series — each block at most ``length`` samples."""
+    a spooled series — each block at most ``length`` samples (:data:`BLOCK` by default)."""
+    length = BLOCK if length is None else length
     stop = series_size(values) if stop is None else min(stop, series_size(values))
     for first in range(start, stop, length):
         last = min(stop, first + length)
@@ -221,8 +223,22 @@ def read(values, start: int, stop: int, step: int = 1) -> np.ndarray:
     return np.asarray(values[start:stop:step], dtype=float)
 
 
+def _once(values, name: str, compute):
+    """``compute()``, computed once for a spooled series (a pass over the record each time
+    otherwise: several stages ask) and every time for an array."""
+    if not is_spooled(values):
+        return compute()
+    if name not in values._statistics:
+        values._statistics[name] = compute()
+    return values._statistics[name]
+
+
 def gap_free_runs(values) -> np.ndarray:
-    """(runs, 2): [start, stop) of each run of samples without NaN, in order."""
+    """(runs, 2): [start, stop) of each run of samples without NaN, in order (read-only)."""
+    return _once(values, "gap_free_runs", lambda: _gap_free_runs(values))
+
+
+def _gap_free_runs(values) -> np.ndarray:
     runs = []
     open_at = None
     for first, block in blocks(values):
@@ -238,12 +254,18 @@ def gap_free_runs(values) -> np.ndarray:
                 open_at = None
     if open_at is not None:
         runs.append((open_at, series_size(values)))
-    return np.array(runs, dtype=np.int64).reshape(-1, 2)
+    runs = np.array(runs, dtype=np.int64).reshape(-1, 2)
+    runs.flags.writeable = False
+    return runs
 
 
 def finite_moments(values) -> tuple[int, float, float]:
     """(count, mean, sum of squared deviations) of the finite samples, combined block by
     block (Chan, Golub & LeVeque 1983) so no block's rounding reaches the others."""
+    return _once(values, "finite_moments", lambda: _finite_moments(values))
+
+
+def _finite_moments(values) -> tuple[int, float, float]:
     count, mean, squares = 0, 0.0, 0.0
     for _, block in blocks(values):
         finite = block[np.isfinite(block)]

@@ -22,7 +22,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax.scipy.linalg import cho_solve, solve_triangular
+from jax.scipy.linalg import cho_solve
 
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from ..recording._series import blocks, gap_free_runs, is_spooled, series_size
@@ -103,51 +103,17 @@ def bias_given_noise(summary: LevelSummary, variances, ramp=0.0):
         jnp.broadcast_to(variances, (*batch, count)).reshape(-1, count),
         jnp.broadcast_to(jnp.asarray(ramp, dtype=variances.dtype), batch).reshape(-1),
     )
-    if count == 2:
-        mean, variance = _bias_of_two_components(summary, *flat)
-    else:
-        # BIAS_BATCH draws at a time: the covariances of a whole posterior's draws at once
-        # (2,000 of 119 x 119) are 230 MB, and building and factorising them took ten times
-        # as long as a batch small enough to stay in the processor's cache.
-        mean, variance = jax.lax.map(
-            lambda draw: _bias_of_draw(summary, *draw), flat, batch_size=BIAS_BATCH
-        )
+    # BIAS_BATCH draws at a time: the covariances of a whole posterior's draws at once
+    # (2,000 of 119 x 119) are 230 MB, and building and factorising them took ten times as
+    # long as a batch small enough to stay in the processor's cache.
+    mean, variance = jax.lax.map(
+        lambda draw: _bias_of_draw(summary, *draw), flat, batch_size=BIAS_BATCH
+    )
     return mean.reshape(batch), variance.reshape(batch)
 
 
 BIAS_BATCH = 32
 """Draws whose block-mean covariances :func:`bias_given_noise` builds and factorises at once."""
-
-
-def _bias_of_two_components(summary: LevelSummary, variances, ramp):
-    """:func:`bias_given_noise` of a model of two components (white noise and a random walk,
-    or flicker), every draw at once: the two covariances diagonalised together, once.
-
-    With A_t the components' bases scaled by their mean weight over the draws, L the
-    Cholesky factor of A_0 + A_1 and U the eigenvectors of L^-1 A_1 L^-T, Phi = L^-T U makes
-    both diagonal, Phi' A_t Phi = D_t; a draw's covariance is then r_0 A_0 + r_1 A_1 (r_t its
-    weight over the mean), its inverse Phi (r_0 D_0 + r_1 D_1)^-1 Phi', and the generalised
-    least squares of :func:`_bias_of_draw` takes a sum over the blocks per draw — where a
-    Cholesky factor per draw (2,000 of 119 x 119) was 0.1 s of a posterior's draws."""
-    scale = jnp.mean(variances, axis=0)
-    scale = jnp.where(scale > 0, scale, 1.0)
-    first, second = summary.basis[0] * scale[0], summary.basis[1] * scale[1]
-    factor = jnp.linalg.cholesky(first + second)
-    half = solve_triangular(factor, second, lower=True)
-    whitened = solve_triangular(factor, half.T, lower=True)
-    _, rotation = jnp.linalg.eigh(0.5 * (whitened + whitened.T))
-    joint = solve_triangular(factor.T, rotation, lower=False)
-    # Each diagonal taken from its own basis (not 1 - the other's: where one component holds
-    # nearly all of a direction, the other's share would be lost to rounding).
-    diagonals = jnp.stack([jnp.sum(joint * (basis @ joint), axis=0) for basis in (first, second)])
-    ones, means, times = (
-        joint.T @ vector
-        for vector in (jnp.ones(summary.block_mean.shape), summary.block_mean, summary.block_time_s)
-    )
-    spread = (variances / scale) @ diagonals  # (draws, blocks): each draw's diagonal
-    precision = jnp.sum(ones**2 / spread, axis=-1)
-    target = means[None, :] - ramp[:, None] * times[None, :]
-    return jnp.sum(ones * target / spread, axis=-1) / precision, 1.0 / precision
 
 
 def _bias_of_draw(summary: LevelSummary, variances, ramp):

@@ -31,6 +31,16 @@ def test_a_quantized_record_is_named_exactly():
     assert result["found"] == ["quantization"] and result["hit"]
 
 
+def test_a_step_beside_a_walk_that_leaves_the_checks_passing_is_named():
+    """``bias_step+rate_random_walk``, the study's seed 4010: the walk alone leaves every
+    check passing, and the search stopped there (the walk named alone). The step the level
+    scan sees strongest beside the walk is now tried once the checks pass, and is decisive
+    (log BF 5.7, the log of the samples its time was chosen among paid, against log 100 =
+    4.6): the pair is named exactly."""
+    result = pairs.run(("bias_step+rate_random_walk", 4010, 10.0))
+    assert result["found"] == ["bias_step", "rate_random_walk"] and result["hit"]
+
+
 def test_bounds_are_clopper_pearson():
     """The 90 % bounds: 0 of n has lower bound 0 and upper 1 - 0.05^(1/n); n of n the mirror;
     5 of 10 is symmetric about 0.5 (0.22-0.78, the exact beta quantiles)."""

@@ -8,9 +8,15 @@ Each record is a static gyro, white noise of 0.05 deg/s per sample at 50 Hz (``-
 long), holding both effects of its pair at random sizes the record can be expected to show
 (each alone at least a few sample sds over the record, or the line or grid plainly there):
 
-- ``rate_random_walk+bias_instability``: a random walk whose share at the record's length is
-  0.5-1.5x the white noise's, and flicker of 0.15-0.25 sample sd (the two slow terms of
-  every MEMS gyro);
+- ``rate_random_walk+bias_instability``: flicker of 0.15-0.25 sample sd and a random walk
+  whose spectrum crosses flicker's at 10-14 / T (the two slow terms of every MEMS gyro: the
+  walk's spread at the record's length 8-9.4 B, the Allan deviation's minimum some 50 s).
+  Each term beside the other must be decisive: the walk shows only below that crossing. As
+  first drawn (the walk's spread at the record's length 0.5-1.5 sample sds, drawn apart from
+  flicker) it was beside flicker in 5 of the 50 records of seed 0, computed as
+  ``--information`` computes it; crossing at 6-10 / T in 34, at 8-12 / T in 50 (10.4 nats
+  the least, its charge 9.4), at 10-14 / T in 50 (13.4-21.4 nats, as the walk beside the
+  Gauss-Markov term below);
 - ``gauss_markov+rate_random_walk``: a Gauss-Markov bias of 0.3-0.6 sample sd with tau
   T / 350 to T / 250, and a random walk whose spectrum crosses the Gauss-Markov plateau at
   6-10 / T (a navigation filter's usual bias model; drawn as ``discovery_unknowns.py`` draws
@@ -25,7 +31,8 @@ long), holding both effects of its pair at random sizes the record can be expect
 - ``quantization+white``: the samples rounded to a grid of 0.5-1 sample sd (a low-resolution
   converter: the grid is named ``quantization``);
 - ``bias_step+rate_random_walk``: a step of 0.5-1 sample sd at 25-75 % of the record
-  (a mode change), and a random walk as above.
+  (a mode change), and a random walk whose spread at the record's length is 0.5-1.5 sample
+  sds.
 
 ``--information`` prints, instead of running discovery, what each record's truth lets a
 search find: for each term of a pair, the expected log likelihood ratio of the pair against
@@ -90,7 +97,10 @@ def draw(pair: str, rng, minutes: float) -> tuple[np.ndarray, dict]:
         case "rate_random_walk+bias_instability":
             truth["flicker"] = rng.uniform(0.15, 0.25) * WHITE_SD
             flicker = bc.NoiseModel(RATE, B=truth["flicker"])
-            truth["walk"] = _walk_step(rng, n)
+            # The walk's two-sided spectrum K^2 / (4 pi^2 f^2) crosses flicker's B^2 / (2 pi f)
+            # at f = K^2 / (2 pi B^2): put that at 6-10 / T.
+            crossing = rng.uniform(10, 14) / (n / RATE)
+            truth["walk"] = truth["flicker"] * math.sqrt(2 * math.pi * crossing / RATE)
             values += np.cumsum(truth["walk"] * rng.standard_normal(n))
             values += flicker.simulate(n, seed=int(rng.integers(2**31)))
         case "gauss_markov+rate_random_walk":

@@ -47,7 +47,7 @@ from ..recording._levels import discrete_step
 from ._checks import CHECK_LEVEL, line_search
 from ._mcmc import summarize
 from ._optimize import maximum_a_posteriori
-from ._scans import level_scan
+from ._scans import level_scan, strongest_step
 
 MIN_SAMPLES = 256
 """Samples discovery needs: below this its checks have too few blocks and bins to say
@@ -174,6 +174,18 @@ class Context:
             return None
         time_s, interval = self._refined(fit, events[0]["time_s"], block)
         return time_s, {"scan_z": events[0]["z"], "time_interval_s": interval}
+
+    def strongest_step(self, fit: ModelFit):
+        """The step the level scan's shapes see standing out most in ``fit``'s residual,
+        however little (its scan passing or not: :func:`~._scans.strongest_step`), refined
+        to a sample as :meth:`level_event` refines one, and the record of the search; None
+        where the record has no step shape."""
+        found = strongest_step(fit, self.data.rate_hz)
+        if found is None:
+            return None
+        time_s, z, block_s = found
+        time_s, interval = self._refined(fit, time_s, block_s)
+        return time_s, {"scan_z": z, "time_interval_s": interval}
 
     def _switches(self, fit: ModelFit, block_s: float) -> tuple[float, ...]:
         """The times (s) where the residual of ``fit`` switches between two levels: binary

@@ -28,7 +28,10 @@ users in docs/guide/discovery.md):
    (pointwise over independent frequency bins and one-block-ahead predictions of the block
    means, AIC-penalised) and the standard error of that gain are reported beside it;
 4. repeat until every check passes (nothing is left to explain) or no term is decisive, and
-   report which located mismatches are gone.
+   report which located mismatches are gone. Where every check passes, one more round tries
+   a bias step where the level scan sees one standing out most, named only on its own
+   decisive Bayes factor with every check still passing: a slow term (a random walk) allows
+   a change of level anywhere, so the checks pass beside a step they do not locate.
 
 Because the candidates compete on the same data, the signatures decide between effects that
 raise the same statistic: a thermal polynomial only explains what follows the temperature, a
@@ -57,6 +60,7 @@ from ..models._terms import (
 )
 from ..models.effects._base import Effect, SlotTerm
 from ..models.effects._catalogue import SEARCHED
+from ..models.effects.bias_step import BiasStep
 from ..models.effects.gauss_markov import GaussMarkov
 from ..models.effects.noise_burst import NoiseBurst
 from ..models.effects.outliers import Outliers, outlier_scan, without_outliers
@@ -413,13 +417,12 @@ def _decided_before_search(
 
 def _search(context: Context, current: ModelFit, checks, max_effects: int, report):
     """Steps 2-4 of the loop (module docstring): while a located check fails, the decisive
-    best candidate is added. Returns the final model, its checks, the findings added and
+    best candidate is added; once every check passes, a step at the level scan's strongest
+    (:func:`_step_beside`). Returns the final model, its checks, the findings added and
     ``undecided`` (the best candidate's name and log Bayes factor where none was decisive)."""
     findings, undecided = [], ()
     for _ in range(max_effects):
-        if not any(
-            not check["passed"] for check in checks if check["name"] not in UNMODELLED_CHECKS
-        ):
+        if not _locates(checks):
             break  # nothing located: nothing left to explain
         report(f"trying terms beyond {', '.join(current.spec.terms())}")
         candidates = _beside_time_constant(context, current, candidate_fits(context, current))
@@ -449,7 +452,43 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
         )
         current = fit
         checks = run_checks(current, context.data)
+    if len(findings) < max_effects and not _locates(checks):
+        stepped = _step_beside(context, current)
+        if stepped is not None:
+            findings.append(stepped[0])
+            current, checks = stepped[0].fit, stepped[1]
     return current, checks, findings, undecided
+
+
+def _locates(checks: list[dict]) -> bool:
+    """Whether a check that a term of the search answers fails."""
+    return any(not check["passed"] for check in checks if check["name"] not in UNMODELLED_CHECKS)
+
+
+def _step_beside(context: Context, current: ModelFit) -> tuple[Finding, list] | None:
+    """A step at the time the level scan sees standing out most beside ``current``, a model
+    that leaves every check passing, with the checks of the model with it: where its log
+    Bayes factor is decisive (charged as in the search, the log of the samples it was
+    located among included) and every check still passes; None otherwise.
+
+    A slow term's predictive distribution allows a change of level anywhere: a walk fitted
+    to a record that also holds a step (a mode change on a wandering bias) leaves the level
+    scan passing, and the search, which stops once every check passes, would never look for
+    the step beside it (a step of 0.75 sample sd beside a walk of 1.1 over a 10-minute
+    record: log Bayes factor 5.7 beside the walk, the log of the samples paid)."""
+    proposal = BiasStep.propose(context, current, anywhere=True)
+    if proposal is None:
+        return None
+    fit, search = proposal
+    log_bayes_factor = fit.schwarz - current.schwarz
+    if not log_bayes_factor > DECISIVE_LOG_BAYES_FACTOR:
+        return None
+    checks = run_checks(fit, context.data)
+    if _locates(checks):
+        return None
+    gain, gain_se = _elpd_difference(fit, current)
+    effect = fit.spec.effects[-1]
+    return Finding(effect, fit, log_bayes_factor, gain, gain_se, (), search), checks
 
 
 def _beside_time_constant(context: Context, current: ModelFit, candidates: dict) -> dict:

@@ -76,9 +76,10 @@ def _level_regressors(blocks: int) -> tuple[np.ndarray, list[tuple[str, int, int
     return np.array(rows), kinds
 
 
-def level_scan(fit: ModelFit, rate_hz: float, unit: str) -> dict:
-    """The level scan (module docstring): steps, stretches and late drifts of the residual's
-    block means against the fitted model's predictive distribution of them."""
+def _whitened_shapes(fit: ModelFit, rate_hz: float):
+    """The level scan's data and shapes in the model's whitened coordinates, the model's free
+    level terms taken out: the block means, the shapes' unit rows, their norms, rows and
+    kinds, and the blocks' first and last samples."""
     residual = fit.residual
     blocks = int(min(SCAN_BLOCKS, residual.size // 8))
     edges = np.linspace(0, residual.size, blocks + 1).round().astype(np.int64)
@@ -102,7 +103,28 @@ def level_scan(fit: ModelFit, rate_hz: float, unit: str) -> dict:
     usable = norms > 1e-12 * norms.max()
     white_rows, norms, rows = white_rows[usable], norms[usable], rows[usable]
     kinds = [kind for kind, keep in zip(kinds, usable, strict=True) if keep]
-    unit_rows = white_rows / norms[:, None]
+    return white_means, white_rows / norms[:, None], norms, rows, kinds, start, stop
+
+
+def strongest_step(fit: ModelFit, rate_hz: float) -> tuple[float, float, float] | None:
+    """The step of the level scan's shapes (a step at a block boundary) that stands out most
+    from ``fit``'s predictive distribution of the block means, however little: its time (s),
+    its z and the scan's block length (s); None where the record has no step shape."""
+    white_means, unit_rows, _, _, kinds, start, stop = _whitened_shapes(fit, rate_hz)
+    steps = [k for k, kind in enumerate(kinds) if kind[0] == "step"]
+    if not steps:
+        return None
+    z = unit_rows[steps] @ white_means
+    best = int(np.argmax(np.abs(z)))
+    block_s = float((stop - start).mean() / rate_hz)
+    return float(start[kinds[steps[best]][1]] / rate_hz), float(z[best]), block_s
+
+
+def level_scan(fit: ModelFit, rate_hz: float, unit: str) -> dict:
+    """The level scan (module docstring): steps, stretches and late drifts of the residual's
+    block means against the fitted model's predictive distribution of them."""
+    white_means, unit_rows, norms, rows, kinds, start, stop = _whitened_shapes(fit, rate_hz)
+    blocks = start.size
     z = unit_rows @ white_means
     worst = int(np.argmax(np.abs(z)))
     statistic = float(abs(z[worst]))

@@ -68,6 +68,11 @@ class Search(Protocol):
         the fit locates, and the search's record; None where it locates none. For
         ``"switches"``, the times of the level changes where it locates switching levels."""
 
+    def strongest_step(self, fit):
+        """The time of the step the level scan's shapes see standing out most in the fit's
+        residual, however little, and the search's record; None where there is no step
+        shape."""
+
     def summarize(self, draws, unit: str) -> dict:
         """Mean, sd, 5 % and 95 % quantiles of posterior draws, with the unit."""
 

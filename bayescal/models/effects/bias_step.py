@@ -61,12 +61,17 @@ class BiasStep(RegressionTerm):
         return [(time_s >= self.time_s).astype(float)], [1.0], [data.unit]
 
     @classmethod
-    def propose(cls, search, current):
+    def propose(cls, search, current, anywhere: bool = False):
         """A step where the level scan of the current model locates one, at the sample the
-        CUSUM profile puts it."""
+        CUSUM profile puts it. ``anywhere``: at the step the scan's shapes see standing out
+        most, its scan passing or not (a step beside a slow term that already leaves every
+        check passing: it is named only on its own decisive evidence)."""
         if current.spec.count(cls.name) >= MAX_COUNT:
             return None
-        located = search.level_event(current, "step")
+        if anywhere:
+            located = search.strongest_step(current)
+        else:
+            located = search.level_event(current, "step")
         if located is None:
             return None
         time_s, record = located

@@ -486,8 +486,8 @@ def _candidates(results, power, taken) -> list[tuple[int, bool]]:
 def _block_phasors(key: bytes) -> np.ndarray:
     """(_CHUNK, L): e^{2 pi i nu k}, k = 0 .. _CHUNK - 1, for the frequencies whose bytes
     are ``key`` (cycles per sample). A block's phasors are these times its first sample's
-    (:func:`_phasors`); kept for the frequencies of the last few fits, each of which reads
-    every block of the record twice or more."""
+    (:func:`_phasors`); kept for the frequencies of the last few fits of a search, each of
+    which reads every block of the record twice or more, and dropped when it ends."""
     nu = np.frombuffer(key)
     return np.exp(2j * np.pi * np.arange(_CHUNK, dtype=float)[:, None] * nu[None, :])
 
@@ -1044,4 +1044,8 @@ def find_lines(
     increments = np.diff(values[start:stop])
     increments = increments[: fast_length_at_most(increments.size)]
     spectrum = _Spectrum(increments, start, float(rate_hz), level)
-    return _described(spectrum, *_search(spectrum, max_lines), level)
+    try:
+        return _described(spectrum, *_search(spectrum, max_lines), level)
+    finally:
+        # The phasors are of this record's frequencies, up to 25 MB each: none serves another.
+        _block_phasors.cache_clear()

@@ -5,12 +5,22 @@ lines; a broadened line is told from a sinusoid and left out of the likelihood; 
 output filter's stop band is named aliased. Seeded; the study over many records is
 benchmarks/noise_lines.py."""
 
+import math
+
 import numpy as np
 import pytest
-from scipy import signal
+from scipy import signal, special
 
 import bayescal as bc
-from bayescal.classical._lines import FULL_REACH, GUARD, SCALES, _Floors, find_lines
+from bayescal.classical._lines import (
+    FULL_REACH,
+    GUARD,
+    SCALES,
+    _Floors,
+    _scale_dof,
+    _scan,
+    find_lines,
+)
 from bayescal.inference._lines_posterior import ALIAS_GAIN
 from bayescal.models._noise_problem import record_components
 from bayescal.models._whittle import spectral_summary
@@ -59,23 +69,73 @@ def test_no_line_in_a_digital_filters_stop_band():
     assert search.lines == ()
 
 
-def test_the_scan_s_floors_read_as_slices_are_those_read_by_index():
-    """The scan reads its millions of floors as slices (:meth:`_Floors.of_windows`): the
-    same floors and counts, to the bit, as the bounds of :meth:`_Floors.at`, at every scale,
-    below and beyond the ordinate where the half-width stops growing, with unusable
-    ordinates among them."""
-    rng = np.random.default_rng(0)
-    size = 3 * FULL_REACH
-    power = rng.exponential(size=size) * np.linspace(1.0, 5.0, size)
-    usable = rng.random(size) > 0.01
-    floors = _Floors(power, usable)
+def _every_window(power, usable, line_index, rho2, alpha):
+    """The scan with every window's floor read (:meth:`_Floors.at`): per scale, the starts,
+    ratios and log p-values of all windows, untested ones at 0."""
+    floors, lowest, highest = _Floors(power, usable), 10, power.size - 2
+    every = []
     for width in SCALES:
-        for first, stop in ((10, size - width), (10, FULL_REACH // 2), (FULL_REACH + 7, size - 5)):
-            centre = np.arange(first, stop) + (width - 1) / 2
-            expected = floors.at(centre, np.full(centre.size, GUARD + (width - 1) / 2))
-            got = floors.of_windows(first, stop, width)
-            np.testing.assert_array_equal(got[1], expected[1])
-            np.testing.assert_array_equal(got[0], expected[0])
+        starts = np.arange(lowest, highest - width + 2)
+        sums = np.convolve(power, np.ones(width), mode="valid")[starts]
+        centre = starts + (width - 1) / 2
+        floor, count = floors.at(centre, np.full(starts.size, GUARD + (width - 1) / 2))
+        good = count >= 4
+        ratio = np.where(good, sums / (width * np.where(good, floor, 1.0)), 0.0)
+        distance = np.min(np.abs(centre[:, None] - line_index[None, :]), axis=1)
+        tested = good & (distance >= 0.5 * width)
+        log_p = np.zeros(starts.size)
+        with np.errstate(divide="ignore"):
+            log_p[tested] = np.log(
+                special.fdtrc(_scale_dof(width, rho2), 2 * count[tested], ratio[tested])
+            )
+        every.append((width, starts, ratio, log_p))
+    return every
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("with_lines", [True, False])
+def test_the_scan_reads_every_window_that_can_matter(seed, with_lines):
+    """The scan reads the floors only of the windows its screen lets matter: the same
+    windows significant, with the same p-values, and the same smallest p-value at a single
+    ordinate (ratio and place), to the bit, as with every window's floor read — on spectra
+    with lines (one whose p-value underflows) and without, unusable ordinates, a step in
+    the floor, a stretch below the floors' resolution, and windows beyond the ordinate
+    where the half-width stops growing."""
+    rng = np.random.default_rng(seed)
+    size = 4 * FULL_REACH
+    power = rng.exponential(size=size) * np.linspace(1.0, 5.0, size)
+    power[3 * FULL_REACH : 3 * FULL_REACH + 2000] *= 1e-17  # a stop band, not resolved
+    power[2 * FULL_REACH + 100 :] *= 30.0  # a step in the floor: blocks whose bound is loose
+    lines = np.array([700, 9000.0, 15000])
+    if with_lines:
+        power[lines.astype(int)] *= np.array([60.0, 1e6, 40.0])
+        power[lines.astype(int)[2] + 2] *= 45.0  # a line beside a line found
+    else:
+        # The largest ordinate's floor holds a cluster its block's bound leaves out: its
+        # ceiling is the highest, its ratio (25 / 1.3) below a lone one's (22 / 1).
+        block = FULL_REACH + 32 * 40
+        level = np.linspace(1.0, 5.0, size)
+        power[block - GUARD : block + 31 - GUARD] = 6.0 * level[block]
+        power[block + 31] = 25.0 * level[block + 31]
+        power[block + 3000] = 22.0 * level[block + 3000]
+    usable = rng.random(size) > 0.01
+    usable[lines.astype(int)[:2]] = False
+    rho2, alpha = 0.1, 1e-12
+    scanned = _scan(power, usable, 10, size - 2, lines[:2], rho2, alpha)
+    every = _every_window(power, usable, lines[:2], rho2, alpha)
+    for (width, starts, ratio, log_p, significant), (_, all_starts, all_ratio, all_log_p) in zip(
+        scanned, every, strict=True
+    ):
+        expected = all_log_p < math.log(alpha)
+        assert expected.any() == (with_lines and width == 1) or width > 1
+        np.testing.assert_array_equal(starts[significant], all_starts[expected])
+        np.testing.assert_array_equal(log_p[significant], all_log_p[expected])
+        np.testing.assert_array_equal(ratio[significant], all_ratio[expected])
+        if width == 1:
+            best, all_best = int(np.argmin(log_p)), int(np.argmin(all_log_p))
+            assert starts[best] == all_starts[all_best]
+            assert (ratio[best], log_p[best]) == (all_ratio[all_best], all_log_p[all_best])
+        assert starts.size < all_starts.size / 10, (width, starts.size)
 
 
 def test_a_record_too_short_is_not_searched():

@@ -74,6 +74,10 @@ FLOOR_ORDINATES = (16, 256)
 """... at least and at most this many ordinates each side."""
 SCALES = (1, 4, 16)
 """Sums of neighbouring ordinates tested: a sinusoid (1) and broadened lines (4, 16)."""
+MIN_FLOOR_ORDINATES = 4
+"""A floor averages at least this many ordinates, or its window is not tested."""
+SCREEN_BLOCK = 32
+"""Windows whose floors the scan bounds together (:meth:`_Floors.lower_bounds`)."""
 REACH = 12
 """Within a round, a candidate must be the largest within this many ordinates: what lies
 beside a strong line (its sidelobes, a weaker neighbour) waits for the record less it."""
@@ -295,11 +299,10 @@ class _Floors:
     end values, so that a window reaching past an end reads as clipped there.
 
     A floor is the mean of the usable ordinates in two windows beside its centre (the module
-    docstring): four reads of each cumulative sum. The scan's windows sit at every ordinate,
-    millions at 2^23 samples, and all but their first few thousand take the largest
-    half-width; the reads of a run of windows of one half-width are slices
-    (:meth:`of_windows`), where gathering them by index cost the scan of 2^23 samples more
-    than a second (an index array, a gather and their rounding and clipping per read)."""
+    docstring): four reads of each cumulative sum (:meth:`at`). The scan's windows sit at
+    every ordinate, millions at 2^23 samples: it reads a lower bound of their floors per
+    block of them (:meth:`lower_bounds`) and the floors themselves only where that bound lets
+    a window matter."""
 
     PAD = 2 * FLOOR_ORDINATES[1] + 2 * GUARD + max(SCALES) + 2
     """Padding each side: past the farthest a scan's window reads beyond either end."""
@@ -322,19 +325,18 @@ class _Floors:
         padded[self.PAD + 1 + cumulative.size :] = cumulative[-1] if cumulative.size else 0.0
         return padded
 
+    @staticmethod
+    def _read(cumulative, left: tuple, right: tuple):
+        """The sum over ordinates [lo, hi) of ``left`` and of ``right``, each bound an index
+        (array) of the padded sums: ordinate + PAD."""
+        return (
+            cumulative[left[1]] - cumulative[left[0]] + cumulative[right[1]] - cumulative[right[0]]
+        )
+
     def _mean(self, left: tuple, right: tuple):
-        """The floor (mean) and count over ordinates [lo, hi) of ``left`` and of ``right``,
-        each bound an index of the padded sums (ordinate + PAD) or a slice of them."""
-
-        def read(cumulative):
-            return (
-                cumulative[left[1]]
-                - cumulative[left[0]]
-                + cumulative[right[1]]
-                - cumulative[right[0]]
-            )
-
-        total, count = read(self.sums), read(self.counts)
+        """The floor (mean) and count over ordinates [lo, hi) of ``left`` and of ``right``
+        (:meth:`_read`)."""
+        total, count = self._read(self.sums, left, right), self._read(self.counts, left, right)
         count = np.where(total > self.resolution, count, 0.0)
         with np.errstate(invalid="ignore", divide="ignore"):
             return total / count, count
@@ -355,25 +357,44 @@ class _Floors:
         )
         return self._mean((lo_left, hi_left), (lo_right, hi_right))
 
-    def of_windows(self, first: int, stop: int, width: int):
-        """:meth:`at` each window of ``width`` ordinates starting at first .. stop - 1 (its
-        centre mid-window, its guard GUARD beyond its edges). The half-width grows with the
-        centre to its largest, which every window from :data:`FULL_REACH` on takes: the
-        first few thousand windows are read by index (:meth:`at`), the millions beyond, whole
-        ordinates at fixed offsets, as slices."""
+    def lower_bounds(self, first: int, stop: int, width: int) -> np.ndarray:
+        """A lower bound of the floor of each window of ``width`` ordinates starting at
+        first .. stop - 1 (as :meth:`at` reads it, its guard GUARD beyond its edges), to
+        screen the millions of windows of a long record (:func:`_scan`): below
+        :data:`FULL_REACH` (a few thousand windows) and for the last few, the floor itself
+        (infinite where too few ordinates make one); beyond, per block of
+        :data:`SCREEN_BLOCK` windows of the floor's full half-width h, the sum over the
+        ordinates every window of the block averages (h - B + 1 each side) over the most
+        ordinates any of them averages (those, and B - 1 more each side). The periodogram is
+        not negative, so no window's floor is below its block's bound; a block whose floors
+        are not resolved is infinite."""
         guard = GUARD + (width - 1) / 2
-        head = np.arange(first, max(first, min(stop, FULL_REACH)))
-        floors, counts = self.at(head + (width - 1) / 2, np.full(head.size, guard))
-        if stop <= FULL_REACH:
-            return floors, counts
-        reach = FLOOR_ORDINATES[1]
-        a, b = max(first, FULL_REACH) + self.PAD, stop + self.PAD
-        inner_left = slice(a - GUARD, b - GUARD)
-        outer_left = slice(a - GUARD - reach, b - GUARD - reach)
-        inner_right = slice(a + width + GUARD, b + width + GUARD)
-        outer_right = slice(a + width + GUARD + reach, b + width + GUARD + reach)
-        tail = self._mean((outer_left, inner_left), (inner_right, outer_right))
-        return np.concatenate((floors, tail[0])), np.concatenate((counts, tail[1]))
+        head_stop = max(first, min(stop, FULL_REACH))
+        blocks = max(0, (stop - head_stop) // SCREEN_BLOCK)
+        rest = np.arange(head_stop + blocks * SCREEN_BLOCK, stop)
+        exact = np.concatenate((np.arange(first, head_stop), rest))
+        floors, counts = self.at(exact + (width - 1) / 2, np.full(exact.size, guard))
+        floors = np.where(counts >= MIN_FLOOR_ORDINATES, floors, np.inf)
+        reach, extra = FLOOR_ORDINATES[1], SCREEN_BLOCK - 1
+        start = head_stop + self.PAD + SCREEN_BLOCK * np.arange(blocks)
+        left = (start + extra - GUARD - reach, start - GUARD)
+        right = (start + extra + width + GUARD, start + width + GUARD + reach)
+        every = (start - GUARD - reach, start + extra - GUARD)
+        every_right = (start + width + GUARD, start + extra + width + GUARD + reach)
+        # The sums' rounding (a few eps of the record's power) is far below their resolution
+        # (:meth:`__init__`): taken off the shared sum, it leaves the bound a bound; a block
+        # whose windows all read below half of it tests nothing (floors not resolved).
+        shared = self._read(self.sums, left, right) - self.resolution
+        count = self._read(self.counts, left, right)
+        resolved = self._read(self.sums, every, every_right) > 0.5 * self.resolution
+        block = np.where(resolved, np.maximum(shared, 0.0) / (count + 2 * extra), np.inf)
+        return np.concatenate(
+            (
+                floors[: head_stop - first],
+                np.repeat(block, SCREEN_BLOCK),
+                floors[head_stop - first :],
+            )
+        )
 
 
 FULL_REACH = math.ceil(FLOOR_ORDINATES[1] / FLOOR_FRACTION)
@@ -406,56 +427,67 @@ def _scale_dof(width: int, rho2: float) -> float:
 
 
 def _scan(power, usable, lowest, highest, line_index, rho2, alpha):
-    """Per scale (width w): the windows' starts, their ratio to the floor, the log of their
-    p-values (one each: F(2 w', 2 c)) and which are significant (p < ``alpha``); a window
-    on a line already found is its residue, not tested."""
+    """Per scale (width w): the starts of the windows that can matter, their ratio to the
+    floor, the log of their p-values (F(2 w', 2 c)) and which are significant (p <
+    ``alpha``); a window on a line already found is its residue, not tested (0).
+
+    The windows that can matter are read exactly, the others only screened: a window's
+    ratio is at most its sum over its floor's lower bound (:meth:`_Floors.lower_bounds`), and
+    its p-value at least that ratio's under the most ordinates a floor averages (F's tail
+    falls as its denominator's degrees of freedom grow). Read: every window that the screen
+    lets reach significance, and at a single ordinate (w = 1) every one that could hold the
+    smallest p-value (:func:`_largest`). The same windows are significant, with the same
+    p-values and the same smallest one, as had every floor been read; at 2^23 samples the
+    scan reads some thousands of floors instead of twelve million."""
     results = []
     log_alpha = math.log(alpha)
     floors = _Floors(power, usable)
+    most = 2 * 2 * FLOOR_ORDINATES[1]  # the F's denominator degrees of freedom, at most
     for width in SCALES:
-        starts = np.arange(lowest, highest - width + 2)
-        if starts.size == 0:
+        stop = highest - width + 2
+        if stop <= lowest:
             continue
-        sums = np.convolve(power, np.ones(width), mode="valid")[starts]
-        centre = starts + (width - 1) / 2
-        floor, count = floors.of_windows(lowest, highest - width + 2, width)
-        good = count >= 4
-        ratio = np.where(good, sums / (width * np.where(good, floor, 1.0)), 0.0)
-        tested = good
-        if line_index.size:  # a line's own ordinate: what a sinusoid leaves there is tested
-            distance = np.min(np.abs(centre[:, None] - line_index[None, :]), axis=1)
-            tested = good & (distance >= 0.5 * width)
-        log_p = _log_p_values(ratio, 2 * np.maximum(count, 1), tested, width, rho2, alpha)
-        results.append((width, starts, ratio, log_p, log_p < log_alpha))
+        sums = np.convolve(power, np.ones(width), mode="valid")[lowest:stop]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ceiling = sums / (width * floors.lower_bounds(lowest, stop, width))
+        dof = _scale_dof(width, rho2)
+        # Significance's quantile a little low: its 1 - alpha rounds, and a window read in
+        # excess costs a floor, one left unread a line.
+        screen = 0.99 * special.fdtri(dof, most, 1.0 - alpha)
+        read = np.flatnonzero(~(ceiling < screen))  # NaN (0 / 0): read
+        if width == 1:
+            # The window of the largest finite ceiling (an infinite one is a bound that says
+            # nothing: a block's floors barely resolved) sets a p-value the smallest is at
+            # most; every window whose ceiling could beat it is read.
+            finite = np.where(np.isfinite(ceiling), ceiling, -1.0)
+            read = np.union1d(read, [int(np.argmax(finite))])
+            _, log_p = _exact(floors, sums, read, lowest, width, line_index, dof)
+            # p of a ratio x over c ordinates: (1 + x / c)^-c, at its smallest for the most c.
+            c = most / 2
+            beyond = c * np.expm1(-float(np.min(log_p)) / c)
+            more = np.flatnonzero(~(ceiling <= 0.99 * beyond))
+            read = np.union1d(read, more)
+        ratio, log_p = _exact(floors, sums, read, lowest, width, line_index, dof)
+        results.append((width, lowest + read, ratio, log_p, log_p < log_alpha))
     return results
 
 
-def _log_p_values(ratio, denominator_dof, tested, width: int, rho2: float, alpha: float):
-    """log p of each window's ``ratio`` under F(2 w', ``denominator_dof``), 0 where not
-    ``tested``. F's tail (special.fdtrc, about a microsecond each: 12 million windows at 2^23
-    samples) is taken only where it can matter: where p may be below a thousand times
-    ``alpha`` (the ratio above F's quantile there), and at the largest ratio among the windows
-    of each floor count (the smallest p-value of them, which :func:`_largest` reads). Every
-    other window's p-value is above ``alpha``: it is left at 1 (log 0), unread."""
-    dof = _scale_dof(width, rho2)
-    log_p = np.zeros(ratio.size)
-    index = np.flatnonzero(tested)
-    if index.size == 0:
-        return log_p
-    values, dofs = ratio[index], denominator_dof[index]
-    # The degrees of freedom are twice a count of ordinates, whole numbers: grouped by a
-    # table of them, not by np.unique's sort (0.4 s of the scan of 2^23 samples).
-    codes = dofs.astype(np.int64)
-    present = np.bincount(codes) > 0
-    levels = np.flatnonzero(present).astype(float)
-    group = (np.cumsum(present) - 1)[codes]
-    bound = special.fdtri(dof, levels, 1.0 - min(0.5, 1e3 * alpha))
-    largest = np.full(levels.size, -np.inf)
-    np.maximum.at(largest, group, values)
-    needed = (values >= bound[group]) | (values == largest[group])
+def _exact(floors, sums, read, lowest, width, line_index, dof):
+    """The ratio to its floor and the log p-value under F(``dof``, 2 c) of the windows
+    ``read`` (indices from ``lowest``) of ``sums``; 0 where a window is not tested (fewer
+    than :data:`MIN_FLOOR_ORDINATES` in its floor, or on a line of ``line_index``)."""
+    centre = lowest + read + (width - 1) / 2
+    floor, count = floors.at(centre, np.full(read.size, GUARD + (width - 1) / 2))
+    good = count >= MIN_FLOOR_ORDINATES
+    ratio = np.where(good, sums[read] / (width * np.where(good, floor, 1.0)), 0.0)
+    tested = good
+    if line_index.size:
+        distance = np.min(np.abs(centre[:, None] - line_index[None, :]), axis=1)
+        tested = good & (distance >= 0.5 * width)
+    log_p = np.zeros(read.size)
     with np.errstate(divide="ignore"):
-        log_p[index[needed]] = np.log(special.fdtrc(dof, dofs[needed], values[needed]))
-    return log_p
+        log_p[tested] = np.log(special.fdtrc(dof, 2 * count[tested], ratio[tested]))
+    return ratio, log_p
 
 
 def _candidates(results, power, taken) -> list[tuple[int, bool]]:

@@ -141,8 +141,8 @@ class SearchResult(eqx.Module):
     undecided: tuple = ()
     """(name, log Bayes factor) of the best candidate when the search stopped with a check
     still failing because no term was decisive; with a third item, the located departure
-    (:class:`~bayescal.inference._located.LocatedDeparture`) it was not decisive against
-    (the log Bayes factor then against that); empty otherwise."""
+    (:class:`~bayescal.inference._located.LocatedDeparture`) it did not beat
+    (:func:`_named_against`; the log Bayes factor then against that); empty otherwise."""
     saturation: dict | None = None
     withdrawn: tuple = ()
     """Findings the search accepted and then withdrew: a check of their band still failed

@@ -462,8 +462,8 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
 
 def _named_against(context: Context, fit: ModelFit, located: ModelFit) -> bool:
     """Whether the slow term ``fit`` adds is named against the located departure
-    (``located``: the current model with it, :func:`~bayescal.inference._located.
-    located_alternative`): where its log Bayes factor against the departure is decisive;
+    (``located``: the current model with it, :func:`located_alternative`): where its log
+    Bayes factor against the departure is decisive;
     or, where the evidence does not decide between the two, where with both in the model the
     departure gains nothing decisive beside the term (the term explains it) and the term
     still improves the predictions beside the departure (a positive AIC-penalised ELPD

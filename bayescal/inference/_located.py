@@ -7,8 +7,12 @@ can absorb one located departure — the kink of a scale factor that changed und
 a stretch where something acted on the sensor — with decisive evidence against the model
 without it, and then leave every check passing, because its predictive distribution allows
 such a departure anywhere. Its name is then the nearest catalogue entry, not the physics:
-the name must also be decisive against the departure itself, located where the scan put it
-(paying the log of the number of shapes the scan tried, as any searched parameter does). A
+the name must also beat the departure itself, located where the scan put it (paying the log
+of the number of shapes the scan tried, as any searched parameter does): decisively, or, where
+the evidence does not decide between them, by explaining it — with both in the model the
+departure gains nothing decisive beside the term, and the term still improves the predictions
+beside the departure (a walk's wandering is spread over the record; a kink is one event, and
+beside it a term that absorbed the kink gains nothing: ``_discovery_search._named_against``). A
 step has a catalogue name of its own (``bias_step``), and so have a drift from the record's
 start (``rate_ramp``) and levels that switch (``random_telegraph``): none is an alternative.
 The findings are then judged (withdrawn or kept) on the model with the located departure taken
@@ -72,9 +76,9 @@ class LocatedDeparture(RegressionTerm):
 def located_alternative(search, current: ModelFit, candidate) -> ModelFit | None:
     """``current`` with the strongest departure its level scan locates, when that is a drift
     that starts late or a stretch (:data:`UNNAMED_SHAPES`), taken out as it is: what the
-    slow catalogue effect ``candidate`` must be decisive against. None when the scan passes,
-    its strongest departure is a step or a drift from the start, or ``candidate`` is not a
-    slow effect or is itself a shape of the scan (:data:`SHAPE_EFFECTS`)."""
+    slow catalogue effect ``candidate`` must beat (module docstring). None when the scan
+    passes, its strongest departure is a step or a drift from the start, or ``candidate``
+    is not a slow effect or is itself a shape of the scan (:data:`SHAPE_EFFECTS`)."""
     if candidate.band != "low" or candidate.name in SHAPE_EFFECTS:
         return None
     data = search.data

@@ -125,7 +125,8 @@ def charges(n: int) -> dict:
 def draw(pair: str, rng, minutes: float) -> tuple[np.ndarray, dict]:
     """The record of ``pair`` (module docstring), deg/s at :data:`RATE`, and its truth: the
     pair's parameters per sample (``walk``: a random walk's step; ``flicker``: B; ``sigma``
-    and ``tau_samples``: a Gauss-Markov term's; ``step``: a step's size)."""
+    and ``tau_samples``: a Gauss-Markov term's; ``step``: a step's size; ``at_s``: its
+    time, s)."""
     import bayescal as bc
 
     n = int(minutes * 60 * RATE)
@@ -161,7 +162,7 @@ def draw(pair: str, rng, minutes: float) -> tuple[np.ndarray, dict]:
             lsb = rng.uniform(0.5, 1.0) * WHITE_SD
             values = np.round(values / lsb) * lsb
         case "bias_step+rate_random_walk":
-            at = rng.uniform(0.25, 0.75) * n / RATE
+            at = truth["at_s"] = rng.uniform(0.25, 0.75) * n / RATE
             multiple, sign = rng.uniform(*STEP_MULTIPLE), rng.choice([-1, 1])
             truth["walk"] = _walk_step(rng, n)
             # The step whose expected log LR beside the walk is that multiple of its charge.

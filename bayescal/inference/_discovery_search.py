@@ -29,11 +29,11 @@ users in docs/guide/discovery.md):
    means, AIC-penalised) and the standard error of that gain are reported beside it;
 4. repeat until every check passes (nothing is left to explain) or no term is decisive, and
    report which located mismatches are gone. Where every check passes, or no term is
-   decisive for what a check still locates, one more round tries a bias step where the level
-   scan sees one standing out most, named only on its own decisive Bayes factor with every
-   check passing with it: a slow term (a random walk) allows a change of level anywhere, so
-   the checks pass beside a step they do not locate, or the level scan locates it as a
-   stretch that ends at the step, for which no step is proposed.
+   decisive and the level scan is the one check failing, one more round tries a bias step
+   where the level scan sees one standing out most, named only on its own decisive Bayes
+   factor with every check passing with it: a slow term (a random walk) allows a change of
+   level anywhere, so the checks pass beside a step they do not locate, or the level scan
+   locates it as a stretch that ends at the step, for which no step is proposed.
 
 Because the candidates compete on the same data, the signatures decide between effects that
 raise the same statistic: a thermal polynomial only explains what follows the temperature, a
@@ -419,8 +419,9 @@ def _decided_before_search(
 
 def _search(context: Context, current: ModelFit, checks, max_effects: int, report):
     """Steps 2-4 of the loop (module docstring): while a located check fails, the decisive
-    best candidate is added; once every check passes, or no candidate is decisive, a step at
-    the level scan's strongest (:func:`_step_beside`). Returns the final model, its checks,
+    best candidate is added; once every check passes, or no candidate is decisive with the
+    level scan the one check failing, a step at the level scan's strongest
+    (:func:`_step_beside`). Returns the final model, its checks,
     the findings added and ``undecided`` (the best candidate's name and log Bayes factor
     where none was decisive and a check still fails)."""
     findings, undecided = [], ()
@@ -455,10 +456,18 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
         )
         current = fit
         checks = run_checks(current, context.data)
-    # Also where no term was decisive for what a check still locates (but not where a name
-    # lost to a located departure: _located judges that one): the level scan can locate a
-    # step beside a walk as a stretch that ends at it, which no step is proposed for.
-    if len(findings) < max_effects and (not _locates(checks) or len(undecided) == 2):
+    # Also where no term was decisive and the level scan is the one check left failing: it
+    # can locate a step beside a walk as a stretch that ends at it, which no step is proposed
+    # for. Not beside another failing check (a step that makes it pass covers a mismatch of
+    # another shape: a sawtooth's Allan deviation at 164 s beside a Gauss-Markov term), nor
+    # where a name lost to a located departure (_located judges that one).
+    failing = {
+        check["name"]
+        for check in checks
+        if not check["passed"] and check["name"] not in UNMODELLED_CHECKS
+    }
+    stuck = len(undecided) == 2 and failing == {BiasStep.located_by}
+    if len(findings) < max_effects and (not failing or stuck):
         stepped = _step_beside(context, current)
         if stepped is not None:
             findings.append(stepped[0])
@@ -473,7 +482,8 @@ def _locates(checks: list[dict]) -> bool:
 
 def _step_beside(context: Context, current: ModelFit) -> tuple[Finding, list] | None:
     """A step at the time the level scan sees standing out most beside ``current`` (a model
-    that leaves every check passing, or one no term was decisive beside), with the checks of
+    that leaves every check passing, or only the level scan failing with no term decisive
+    beside it), with the checks of
     the model with it: where its log Bayes factor is decisive (charged as in the search, the
     log of the samples it was located among included) and every check passes with it; None
     otherwise.

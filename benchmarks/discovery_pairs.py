@@ -38,7 +38,8 @@ long), holding both effects of its pair at random sizes the record can be expect
   changed) of about one sample sd, the size a 10-minute record just tells from the walk. As
   first drawn (the step 0.5-1 sample sd, drawn apart from the walk) it was above its charge
   in 38 of the 50 records of seed 0 (10.8-79.1 nats), and named in 30; redrawn, 50/50
-  (39.6-59.0 nats). The walk beside the step holds 292-2449 nats against 9.4 either way.
+  (39.6-59.0 nats), and named in 49. The walk beside the step holds 292-2449 nats against
+  9.4 either way.
 
 ``--information`` prints, instead of running discovery, what each record's truth lets a
 search find: for each term of a pair, the expected log likelihood ratio of the pair against

@@ -53,10 +53,10 @@ def test_a_step_beside_a_walk_that_leaves_the_checks_passing_is_named():
 def test_a_step_the_level_scan_locates_as_a_stretch_is_named():
     """``bias_step+rate_random_walk``, the study's seed 4034 (a step of 0.82 sample sd at
     367.0 s beside a walk of 0.62): beside the walk the level scan fails on a stretch
-    215.6-365.6 s that ends at the step, for which no step is proposed, and no term was
-    decisive (a ramp the best, log BF -4.3): the search stopped with the walk alone. The step
-    the scan sees strongest is now tried there too, and is decisive (log BF 17.2) with every
-    check passing: the pair is named exactly."""
+    215.6-365.6 s that ends at the step, for which no step is proposed, the one check
+    failing, and no term was decisive (a ramp the best, log BF -4.3): the search stopped with
+    the walk alone. The step the scan sees strongest is now tried there too, and is decisive
+    (log BF 17.2) with every check passing: the pair is named exactly."""
     result = pairs.run((STEP, 4034, 10.0))
     assert result["found"] == ["bias_step", "rate_random_walk"] and result["hit"]
 

@@ -8,6 +8,7 @@ from _benchmarks import load_benchmark
 
 pairs = load_benchmark("discovery_pairs")
 SLOW = "rate_random_walk+bias_instability"
+STEP = "bias_step+rate_random_walk"
 
 
 def test_each_pair_is_simulated_with_what_it_names():
@@ -32,12 +33,31 @@ def test_a_quantized_record_is_named_exactly():
 
 
 def test_a_step_beside_a_walk_that_leaves_the_checks_passing_is_named():
-    """``bias_step+rate_random_walk``, the study's seed 4010: the walk alone leaves every
-    check passing, and the search stopped there (the walk named alone). The step the level
-    scan sees strongest beside the walk is now tried once the checks pass, and is decisive
-    (log BF 5.7, the log of the samples its time was chosen among paid, against log 100 =
-    4.6): the pair is named exactly."""
-    result = pairs.run(("bias_step+rate_random_walk", 4010, 10.0))
+    """``bias_step+rate_random_walk``, the study's seed 4010 with the step as the pair first
+    drew it (0.75 sample sd from the same number of the seed's stream; now drawn from the
+    record's information, 1.12): the walk alone leaves every check passing, and the search
+    stopped there (the walk named alone). The step the level scan sees strongest beside the
+    walk is now tried once the checks pass, and is decisive (log BF 5.7, the log of the
+    samples its time was chosen among paid, against log 100 = 4.6): the pair is named
+    exactly."""
+    import bayescal as bc
+
+    values, truth = pairs.draw(STEP, np.random.default_rng(4010), 10.0)
+    first = 0.7482215687457614 * pairs.WHITE_SD * np.sign(truth["step"])
+    later = np.arange(values.size) / pairs.RATE >= truth["at_s"]
+    values = values + (first - truth["step"]) * later
+    found = bc.discover(values, pairs.RATE, unit="deg/s", posterior=False, seed=4010)
+    assert sorted({effect.name for effect in found.effects}) == ["bias_step", "rate_random_walk"]
+
+
+def test_a_step_the_level_scan_locates_as_a_stretch_is_named():
+    """``bias_step+rate_random_walk``, the study's seed 4034 (a step of 0.82 sample sd at
+    367.0 s beside a walk of 0.62): beside the walk the level scan fails on a stretch
+    215.6-365.6 s that ends at the step, for which no step is proposed, the one check
+    failing, and no term was decisive (a ramp the best, log BF -4.3): the search stopped with
+    the walk alone. The step the scan sees strongest is now tried there too, and is decisive
+    (log BF 17.2) with every check passing: the pair is named exactly."""
+    result = pairs.run((STEP, 4034, 10.0))
     assert result["found"] == ["bias_step", "rate_random_walk"] and result["hit"]
 
 
@@ -92,19 +112,28 @@ def test_a_steps_information_beside_a_walk_is_the_whittle_integral():
 
 
 def test_the_slow_pairs_are_drawn_where_each_term_is_decisive_beside_the_other():
-    """Each of the first three records of seed 0 of the Gauss-Markov + walk and the walk +
-    flicker pairs: both terms' expected log likelihood ratios (from the truth) exceed what the
-    search charges them; a walk drawn apart from flicker, at 0.5-1.5 sample sds over the
-    record (the pair's first draw), falls short on record 0's flicker."""
+    """Each of the first three records of seed 0 of the Gauss-Markov + walk, the walk +
+    flicker and the step + walk pairs: both terms' expected log likelihood ratios (from the
+    truth) exceed what the search charges them, the step's at 2-3 times its charge; a walk
+    drawn apart from flicker, at 0.5-1.5 sample sds over the record (the pair's first draw),
+    falls short on record 0's flicker, and so does a step of 0.5 sample sd (the least of the
+    step's first draw, 0.5-1) beside record 4000's walk."""
     n = int(10 * 60 * pairs.RATE)
-    for pair, first in (("gauss_markov+rate_random_walk", 1000), (SLOW, 0)):
+    for pair, first in (("gauss_markov+rate_random_walk", 1000), (SLOW, 0), (STEP, 4000)):
         for seed in (first, first + 1, first + 2):
             _, truth = pairs.draw(pair, np.random.default_rng(seed), 10.0)
             for ratio, charge in pairs.information(pair, truth, n).values():
                 assert ratio > charge
+    for seed in (4000, 4001, 4002):
+        _, truth = pairs.draw(STEP, np.random.default_rng(seed), 10.0)
+        ratio, charge = pairs.information(STEP, truth, n)["bias_step"]
+        assert 2 * charge <= ratio <= 3 * charge
     _, truth = pairs.draw(SLOW, np.random.default_rng(0), 10.0)
     apart = truth | {"walk": 0.5 * pairs.WHITE_SD / np.sqrt(n)}
     ratio, charge = pairs.information(SLOW, apart, n)["rate_random_walk"]
+    assert ratio < charge
+    _, truth = pairs.draw(STEP, np.random.default_rng(4000), 10.0)
+    ratio, charge = pairs.information(STEP, truth | {"step": 0.5 * pairs.WHITE_SD}, n)["bias_step"]
     assert ratio < charge
 
 

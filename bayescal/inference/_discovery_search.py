@@ -28,10 +28,12 @@ users in docs/guide/discovery.md):
    (pointwise over independent frequency bins and one-block-ahead predictions of the block
    means, AIC-penalised) and the standard error of that gain are reported beside it;
 4. repeat until every check passes (nothing is left to explain) or no term is decisive, and
-   report which located mismatches are gone. Where every check passes, one more round tries
-   a bias step where the level scan sees one standing out most, named only on its own
-   decisive Bayes factor with every check still passing: a slow term (a random walk) allows
-   a change of level anywhere, so the checks pass beside a step they do not locate.
+   report which located mismatches are gone. Where every check passes, or no term is
+   decisive and the level scan is the one check failing, one more round tries a bias step
+   where the level scan sees one standing out most, named only on its own decisive Bayes
+   factor with every check passing with it: a slow term (a random walk) allows a change of
+   level anywhere, so the checks pass beside a step they do not locate, or the level scan
+   locates it as a stretch that ends at the step, for which no step is proposed.
 
 Because the candidates compete on the same data, the signatures decide between effects that
 raise the same statistic: a thermal polynomial only explains what follows the temperature, a
@@ -417,9 +419,11 @@ def _decided_before_search(
 
 def _search(context: Context, current: ModelFit, checks, max_effects: int, report):
     """Steps 2-4 of the loop (module docstring): while a located check fails, the decisive
-    best candidate is added; once every check passes, a step at the level scan's strongest
-    (:func:`_step_beside`). Returns the final model, its checks, the findings added and
-    ``undecided`` (the best candidate's name and log Bayes factor where none was decisive)."""
+    best candidate is added; once every check passes, or no candidate is decisive with the
+    level scan the one check failing, a step at the level scan's strongest
+    (:func:`_step_beside`). Returns the final model, its checks,
+    the findings added and ``undecided`` (the best candidate's name and log Bayes factor
+    where none was decisive and a check still fails)."""
     findings, undecided = [], ()
     for _ in range(max_effects):
         if not _locates(checks):
@@ -452,11 +456,22 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
         )
         current = fit
         checks = run_checks(current, context.data)
-    if len(findings) < max_effects and not _locates(checks):
+    # Also where no term was decisive and the level scan is the one check left failing: it
+    # can locate a step beside a walk as a stretch that ends at it, which no step is proposed
+    # for. Not beside another failing check (a step that makes it pass covers a mismatch of
+    # another shape: a sawtooth's Allan deviation at 164 s beside a Gauss-Markov term), nor
+    # where a name lost to a located departure (_located judges that one).
+    failing = {
+        check["name"]
+        for check in checks
+        if not check["passed"] and check["name"] not in UNMODELLED_CHECKS
+    }
+    stuck = len(undecided) == 2 and failing == {BiasStep.located_by}
+    if len(findings) < max_effects and (not failing or stuck):
         stepped = _step_beside(context, current)
         if stepped is not None:
             findings.append(stepped[0])
-            current, checks = stepped[0].fit, stepped[1]
+            current, checks, undecided = stepped[0].fit, stepped[1], ()
     return current, checks, findings, undecided
 
 
@@ -491,16 +506,21 @@ def _locates(checks: list[dict]) -> bool:
 
 
 def _step_beside(context: Context, current: ModelFit) -> tuple[Finding, list] | None:
-    """A step at the time the level scan sees standing out most beside ``current``, a model
-    that leaves every check passing, with the checks of the model with it: where its log
-    Bayes factor is decisive (charged as in the search, the log of the samples it was
-    located among included) and every check still passes; None otherwise.
+    """A step at the time the level scan sees standing out most beside ``current`` (a model
+    that leaves every check passing, or only the level scan failing with no term decisive
+    beside it), with the checks of
+    the model with it: where its log Bayes factor is decisive (charged as in the search, the
+    log of the samples it was located among included) and every check passes with it; None
+    otherwise.
 
     A slow term's predictive distribution allows a change of level anywhere: a walk fitted
     to a record that also holds a step (a mode change on a wandering bias) leaves the level
     scan passing, and the search, which stops once every check passes, would never look for
     the step beside it (a step of 0.75 sample sd beside a walk of 1.1 over a 10-minute
-    record: log Bayes factor 5.7 beside the walk, the log of the samples paid)."""
+    record: log Bayes factor 5.7 beside the walk, the log of the samples paid). Or the scan
+    fails on a stretch that ends at the step (a step is proposed only where it locates one),
+    no term is decisive, and the search stops there (a step of 0.82 sample sd beside a walk
+    of 0.62: log Bayes factor 17.2, every check passing with it)."""
     proposal = BiasStep.propose(context, current, anywhere=True)
     if proposal is None:
         return None

@@ -458,16 +458,21 @@ def _scan(power, usable, lowest, highest, line_index, rho2, alpha):
         if width == 1:
             # The window of the largest finite ceiling (an infinite one is a bound that says
             # nothing: a block's floors barely resolved) sets a p-value the smallest is at
-            # most; every window whose ceiling could beat it is read.
+            # most; every window whose ceiling could beat it is read next.
             finite = np.where(np.isfinite(ceiling), ceiling, -1.0)
             read = np.union1d(read, [int(np.argmax(finite))])
-            _, log_p = _exact(floors, sums, read, lowest, width, line_index, dof)
+        ratio, log_p = _exact(floors, sums, read, lowest, width, line_index, dof)
+        if width == 1:
             # p of a ratio x over c ordinates: (1 + x / c)^-c, at its smallest for the most c.
             c = most / 2
             beyond = c * np.expm1(-float(np.min(log_p)) / c)
-            more = np.flatnonzero(~(ceiling <= 0.99 * beyond))
-            read = np.union1d(read, more)
-        ratio, log_p = _exact(floors, sums, read, lowest, width, line_index, dof)
+            more = np.setdiff1d(np.flatnonzero(~(ceiling <= 0.99 * beyond)), read)
+            if more.size:
+                more_ratio, more_log_p = _exact(floors, sums, more, lowest, width, line_index, dof)
+                order = np.argsort(np.concatenate((read, more)), kind="stable")
+                read = np.concatenate((read, more))[order]
+                ratio = np.concatenate((ratio, more_ratio))[order]
+                log_p = np.concatenate((log_p, more_log_p))[order]
         results.append((width, lowest + read, ratio, log_p, log_p < log_alpha))
     return results
 

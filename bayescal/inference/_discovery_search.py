@@ -426,7 +426,7 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
     where none was decisive and a check still fails)."""
     findings, undecided = [], ()
     for _ in range(max_effects):
-        if not _locates(checks):
+        if not _failing(checks):
             break  # nothing located: nothing left to explain
         report(f"trying terms beyond {', '.join(current.spec.terms())}")
         candidates = _beside_time_constant(context, current, candidate_fits(context, current))
@@ -461,11 +461,7 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
     # for. Not beside another failing check (a step that makes it pass covers a mismatch of
     # another shape: a sawtooth's Allan deviation at 164 s beside a Gauss-Markov term), nor
     # where a name lost to a located departure (_located judges that one).
-    failing = {
-        check["name"]
-        for check in checks
-        if not check["passed"] and check["name"] not in UNMODELLED_CHECKS
-    }
+    failing = _failing(checks)
     stuck = len(undecided) == 2 and failing == {BiasStep.located_by}
     if len(findings) < max_effects and (not failing or stuck):
         stepped = _step_beside(context, current)
@@ -500,9 +496,13 @@ def _named_against(context: Context, fit: ModelFit, located: ModelFit) -> bool:
     return explained and _elpd_difference(both, located)[0] > 0
 
 
-def _locates(checks: list[dict]) -> bool:
-    """Whether a check that a term of the search answers fails."""
-    return any(not check["passed"] for check in checks if check["name"] not in UNMODELLED_CHECKS)
+def _failing(checks: list[dict]) -> set[str]:
+    """The failing checks that a term of the search answers (those not unmodelled)."""
+    return {
+        check["name"]
+        for check in checks
+        if not check["passed"] and check["name"] not in UNMODELLED_CHECKS
+    }
 
 
 def _step_beside(context: Context, current: ModelFit) -> tuple[Finding, list] | None:
@@ -529,7 +529,7 @@ def _step_beside(context: Context, current: ModelFit) -> tuple[Finding, list] | 
     if not log_bayes_factor > DECISIVE_LOG_BAYES_FACTOR:
         return None
     checks = run_checks(fit, context.data)
-    if _locates(checks):
+    if _failing(checks):
         return None
     gain, gain_se = _elpd_difference(fit, current)
     effect = fit.spec.effects[-1]

@@ -119,10 +119,6 @@ def _de_step(log_density, model, grouped, halves, log_probs, pairs, gamma, log_u
     )
 
 
-_STEP_ARRAYS = 5
-"""The arrays of :func:`_de_step` passed anew at each step (after the model's)."""
-
-
 class _BatchLogDensity:
     """``theta (walkers, dimension) -> (walkers,)`` log densities as numpy, for emcee, and
     :meth:`de_step`, a whole step of :class:`GroupedDEMove` in one compiled call

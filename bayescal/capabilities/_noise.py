@@ -35,6 +35,7 @@ from ..models._terms import (
     parse_terms,
     without_found,
 )
+from ..models._whittle import MAX_SEGMENT
 from ..models.effects.spectral_lines import SpectralLines
 from ..recording._inputs import channel_input
 from ..recording._levels import discrete_step
@@ -307,8 +308,8 @@ def noise_setup(values, rate_hz: float, terms, unit: str, level_values=None, all
     # Terms found in the record (spectral lines) are taken out before the noise is fitted:
     # the noise model, its checks and N are of what they leave.
     # The line scan's periodogram of the record and the summaries' are one transform where
-    # no line is taken out: computed once.
-    with one_transform_per_record():
+    # no line is taken out and the summaries take the record in one piece: computed once.
+    with one_transform_per_record(MAX_SEGMENT):
         with stage("spectral lines (periodogram scan)"):
             found = find_in_record(family, values, rate_hz)
         if any(finding.found for finding in found.values()):

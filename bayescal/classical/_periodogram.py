@@ -54,18 +54,20 @@ def fast_length_at_most(length: int) -> int:
 
 
 _KEPT = contextvars.ContextVar("bayescal_kept_transform", default=None)
-"""Inside :func:`one_transform_per_record`: a list holding at most one (increments, taper,
-mean, transform)."""
+"""Inside :func:`one_transform_per_record`: (a list holding at most one (increments, taper,
+mean, transform), the most increments kept)."""
 
 
 @contextlib.contextmanager
-def one_transform_per_record():
-    """Within the block, the first :func:`tapered_transform` computed is kept, and a later
-    one of the same increments under the same taper is that one, not computed again: a noise
-    fit's line scan and its Whittle summaries both transform the whole record's increments
-    (0.3-0.6 s each at 2^23 samples), the same numbers in the same order, so the same bits.
-    Kept only within the block (a copy of the increments and the transform: 130 MB at 2^23)."""
-    token = _KEPT.set([])
+def one_transform_per_record(most: int):
+    """Within the block, the first :func:`tapered_transform` of at most ``most`` increments
+    is kept, and a later one of the same increments under the same taper is that one, not
+    computed again: a noise fit's line scan and its Whittle summaries both transform the whole
+    record's increments where the summaries take it in one piece (``most``: the longest piece
+    they take; a longer record's pieces are other transforms, and nothing is kept for them),
+    the same numbers in the same order, so the same bits. Kept only within the block (a copy
+    of the increments and the transform: 24 MB at 2^20 samples)."""
+    token = _KEPT.set(([], most))
     try:
         yield
     finally:
@@ -77,7 +79,7 @@ def tapered_transform(increments: np.ndarray, taper: np.ndarray) -> tuple[float,
     mean)`` (read-only): the transform whose squared modulus is the periodogram (module
     docstring). Inside :func:`one_transform_per_record`, those of the first increments and
     taper are kept."""
-    kept = _KEPT.get()
+    kept, most = _KEPT.get() or (None, 0)
     if kept:
         ((data, window, mean, transform),) = kept
         if (
@@ -89,7 +91,7 @@ def tapered_transform(increments: np.ndarray, taper: np.ndarray) -> tuple[float,
     mean = float(np.dot(taper, increments) / taper.sum())
     transform = fft.rfft(taper * (increments - mean))
     transform.flags.writeable = False
-    if kept is not None and not kept:
+    if kept == [] and increments.size <= most:
         kept.append((increments.copy(), taper, mean, transform))
     return mean, transform
 

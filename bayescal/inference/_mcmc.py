@@ -209,8 +209,8 @@ class GroupedDEMove(DEMove):
 
     The random numbers are drawn from emcee's generator (``model.random``) as numpy arrays;
     a log density from :func:`batch_log_density` then makes the whole step, both halves, in
-    one compiled call (:meth:`_BatchLogDensity.de_step`: emcee's ``DEMove`` made two, and its
-    Python between them cost as much again), any other log density is called once a half.
+    one compiled call (:meth:`_BatchLogDensity.de_step`, where emcee's ``DEMove`` made two
+    with emcee's Python per half between them); any other log density is called once a half.
 
     Parameters
     ----------
@@ -256,11 +256,15 @@ class GroupedDEMove(DEMove):
         )
         step = getattr(model.log_prob_fn, "de_step", None)
         if step is None:
-            halves, log_probs, moved, invalid = de_halves(np, model.log_prob_fn, *arrays)
+
+            def densities(theta):
+                return np.asarray(model.log_prob_fn(theta), dtype=float)
+
+            halves, log_probs, moved, invalid = de_halves(np, densities, *arrays)
         else:
             halves, log_probs, moved, invalid = step(*arrays)
-        if invalid:
-            raise ValueError("a proposal or its log probability was NaN or infinite")
+        if invalid:  # as emcee's own moves
+            raise ValueError("a proposal was not finite, or its log probability NaN")
         coords, log_prob = state.coords.copy(), state.log_prob.copy()
         coords[index] = halves
         log_prob[index] = log_probs

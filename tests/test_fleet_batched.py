@@ -16,7 +16,8 @@ from _benchmarks import load_benchmark
 import bayescal as bc
 from bayescal._errors import InputError
 from bayescal.capabilities._noise import prepare_noise
-from bayescal.inference._batched import GroupedDEMove, sample_noise_each, stack_problems
+from bayescal.inference._batched import sample_noise_each, stack_problems
+from bayescal.inference._mcmc import GroupedDEMove
 
 RECORDINGS = 6
 SAMPLES = 4096

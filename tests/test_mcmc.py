@@ -1,11 +1,13 @@
 """The sampler leaves the posterior invariant: its stored draws of a known distribution have
 that distribution's variances (the check that caught emcee's snooker move, whose draws were
-2-3 % too narrow in sd)."""
+2-3 % too narrow in sd), and its move, a whole step in one compiled call, samples a known
+Gaussian with its mean and covariance."""
 
 import numpy as np
+from emcee.autocorr import integrated_time
 
 from bayescal.inference import _mcmc
-from bayescal.inference._mcmc import diagnose, sample_ensemble
+from bayescal.inference._mcmc import batch_log_density, diagnose, ensemble, sample_ensemble
 
 COVARIANCE = np.array(
     [
@@ -19,8 +21,58 @@ PRECISION = np.linalg.inv(COVARIANCE)
 RUNS = 8
 
 
+def _gaussian(model, x):
+    """The log density of N(mean, precision^-1) at one walker ``x``, ``model`` (mean,
+    precision): traced, as the library's log densities are."""
+    mean, precision = model
+    return -0.5 * (x - mean) @ precision @ (x - mean)
+
+
 def gaussian_log_density(x):
     return -0.5 * np.einsum("...i,ij,...j->...", x, PRECISION, x)
+
+
+TARGET_MEAN = np.array([1.0, -2.0])
+TARGET_COVARIANCE = np.array([[1.0, 1.2], [1.2, 4.0]])
+GROUPS, GROUP_WALKERS, STEPS = 64, 4, 3000
+
+
+def test_the_compiled_move_samples_a_known_gaussian():
+    """64 groups of 4 walkers, each group an ensemble of its own on one correlated 2-D Gaussian
+    (the move's smallest groups, where a wrong step shows most), 3,000 steps, one compiled call
+    each: the draws after the first tenth have the target's mean (within 0.02 sd), variances
+    (ratio within 0.03 of 1) and correlation 0.6 (within 0.015).
+
+    About 66,000 effective draws a coordinate (autocorrelation time 10-11 steps): the mean's
+    Monte Carlo sd is 0.004 sd, the variance ratio's and the correlation's about 0.005; the
+    tolerances are some five of these, and five seeds gave |mean| <= 0.008 sd, ratios
+    0.999-1.005, correlations 0.596-0.601. Mutated, it fails: the second half proposing from
+    the first half's walkers before their update gave variance ratios 1.07-1.09; the
+    acceptance with the log densities of rejected proposals kept 1.25-1.31, with half the log
+    density ratio 1.99-2.02 (three seeds each)."""
+    models = (
+        np.tile(TARGET_MEAN, (GROUPS, 1)),
+        np.tile(np.linalg.inv(TARGET_COVARIANCE), (GROUPS, 1, 1)),
+    )
+    rng = np.random.default_rng(0)
+    walkers = GROUPS * GROUP_WALKERS
+    sampler = ensemble(
+        batch_log_density(_gaussian, models, grouped=True), walkers, 2, rng, groups=GROUPS
+    )
+    start = (
+        TARGET_MEAN + rng.standard_normal((walkers, 2)) @ np.linalg.cholesky(TARGET_COVARIANCE).T
+    )
+    sampler.run_mcmc(start, STEPS)
+    chain = sampler.get_chain(discard=STEPS // 10)
+    draws = chain.reshape(-1, 2)
+    sd = np.sqrt(np.diag(TARGET_COVARIANCE))
+    covariance = np.cov(draws, rowvar=False)
+    assert np.all(np.abs(draws.mean(axis=0) - TARGET_MEAN) / sd < 0.02), draws.mean(axis=0)
+    ratio = np.diag(covariance) / np.diag(TARGET_COVARIANCE)
+    assert np.all(np.abs(ratio - 1.0) < 0.03), ratio
+    correlation = covariance[0, 1] / np.sqrt(covariance[0, 0] * covariance[1, 1])
+    assert abs(correlation - 0.6) < 0.015, correlation
+    assert np.all(integrated_time(chain, tol=0) < 15)  # the effective draws assumed above
 
 
 def test_stored_draws_have_the_target_variances():
@@ -31,7 +83,7 @@ def test_stored_draws_have_the_target_variances():
     ratios = []
     for seed in range(RUNS):
         sampler, converged = sample_ensemble(
-            gaussian_log_density,
+            batch_log_density(_gaussian, (np.zeros(4), PRECISION)),
             np.zeros(4),
             COVARIANCE,
             np.random.default_rng(seed),

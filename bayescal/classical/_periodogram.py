@@ -10,6 +10,8 @@ sum h^2 then has the spectrum of the increments as its mean, per cycle per sampl
 (white increments of variance s^2 read s^2).
 """
 
+import contextlib
+import contextvars
 import functools
 import math
 
@@ -51,9 +53,51 @@ def fast_length_at_most(length: int) -> int:
     return candidate
 
 
+_KEPT = contextvars.ContextVar("bayescal_kept_transform", default=None)
+"""Inside :func:`one_transform_per_record`: (a list holding at most one (increments, taper,
+mean, transform), the most increments kept)."""
+
+
+@contextlib.contextmanager
+def one_transform_per_record(most: int):
+    """Within the block, the first :func:`tapered_transform` of at most ``most`` increments
+    is kept, and a later one of the same increments under the same taper is that one, not
+    computed again: a noise fit's line scan and its Whittle summaries both transform the whole
+    record's increments where the summaries take it in one piece (``most``: the longest piece
+    they take; a longer record's pieces are other transforms, and nothing is kept for them),
+    the same numbers in the same order, so the same bits. Kept only within the block (a copy
+    of the increments and the transform: 24 MB at 2^20 samples)."""
+    token = _KEPT.set(([], most))
+    try:
+        yield
+    finally:
+        _KEPT.reset(token)
+
+
+def tapered_transform(increments: np.ndarray, taper: np.ndarray) -> tuple[float, np.ndarray]:
+    """The taper-weighted mean of ``increments`` and the real DFT of ``taper * (increments -
+    mean)`` (read-only): the transform whose squared modulus is the periodogram (module
+    docstring). Inside :func:`one_transform_per_record`, those of the first increments and
+    taper are kept."""
+    kept, most = _KEPT.get() or (None, 0)
+    if kept:
+        ((data, window, mean, transform),) = kept
+        if (
+            data.shape == increments.shape
+            and (window is taper or np.array_equal(window, taper))
+            and np.array_equal(data, increments)
+        ):
+            return mean, transform
+    mean = float(np.dot(taper, increments) / taper.sum())
+    transform = fft.rfft(taper * (increments - mean))
+    transform.flags.writeable = False
+    if kept == [] and increments.size <= most:
+        kept.append((increments.copy(), taper, mean, transform))
+    return mean, transform
+
+
 def increment_periodogram(increments: np.ndarray, taper: np.ndarray) -> np.ndarray:
     """I_j at j = 0 .. M // 2 of ``increments`` (M of them) under ``taper``: |DFT of the
     tapered increments less their taper-weighted mean|^2 / sum h^2 (module docstring)."""
-    mean = float(np.dot(taper, increments) / taper.sum())
-    transform = fft.rfft(taper * (increments - mean))
+    _, transform = tapered_transform(increments, taper)
     return (transform.real**2 + transform.imag**2) / np.sum(taper**2)

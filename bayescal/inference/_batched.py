@@ -6,8 +6,8 @@ for_likelihood`), are stacked as one pytree (:func:`stack_problems`: every array
 leading axis of records; their static parts — terms, rate, components — must agree). Their
 MAPs are one ``vmap`` of the optimiser (:func:`~._optimize.maximum_a_posteriori_each`), each
 with its own convergence; their posteriors one emcee run of ``records x walkers`` walkers
-whose log densities are one compiled call per step (vmap over the records of vmap over their
-walkers, :func:`~._mcmc.batch_log_density` ``grouped``), moved by :class:`GroupedDEMove`:
+whose steps are one compiled call each (vmap over the records of vmap over their walkers,
+:func:`~._mcmc.batch_log_density` ``grouped``), moved by :class:`~._mcmc.GroupedDEMove`:
 differential evolution whose walkers pair only within their own record, so that each record's
 walkers are an ensemble of its own posterior, as if sampled alone. Each record's walkers start
 from its own Laplace approximation, and its chain is judged by the same checks
@@ -24,8 +24,6 @@ those of the records sampled alone (the random streams differ); their distributi
 import jax
 import numpy as np
 from emcee.autocorr import integrated_time
-from emcee.moves import DEMove
-from emcee.state import State
 
 from .._errors import InputError
 from ..models._noise_problem import NoiseProblem
@@ -64,69 +62,6 @@ def stack_problems(problems, names) -> NoiseProblem:
             fix="fit records of one length, rate and terms together",
         )
     return jax.tree.map(lambda *leaves: np.stack(leaves), *shaped)
-
-
-class GroupedDEMove(DEMove):
-    """emcee's differential-evolution move (ter Braak 2006; :class:`emcee.moves.DEMove`,
-    gamma ~ gamma0 (1 + sigma z)) within groups: the ensemble is ``groups`` equal groups of
-    walkers, in order, and each group is split at random into two halves, a walker's proposal
-    taking the difference of two walkers of its own group's other half. Each group's update
-    is the red-blue update of emcee's move on that group alone (a valid Metropolis-Hastings
-    update of each walker given the others), so that groups sampling different posteriors
-    never mix.
-
-    Parameters
-    ----------
-    groups : int
-        The number of groups; the walkers must divide into them, at least four a group.
-    sigma : float
-        The relative spread of gamma (emcee's default).
-    gamma0 : float, optional
-        The mean of gamma; default 2.38 / sqrt(2 dimension).
-    """
-
-    def __init__(self, groups: int, sigma: float = 1e-5, gamma0: float | None = None):
-        super().__init__(sigma=sigma, gamma0=gamma0)
-        self.groups = groups
-
-    def propose(self, model, state):
-        """Move each group's two halves in turn; returns the state and which walkers moved."""
-        walkers, dimension = state.coords.shape
-        size = walkers // self.groups
-        if size * self.groups != walkers or size < 4 or size % 2:
-            raise ValueError(
-                f"{walkers} walkers do not divide into {self.groups} groups of an even "
-                "number of at least four"
-            )
-        self.setup(state.coords)
-        random, half = model.random, size // 2
-        offset = (np.arange(self.groups) * size)[:, None]
-        # Each group's walkers in a random order: its first half moves, then its second.
-        order = np.argsort(random.rand(self.groups, size), axis=1)
-        accepted = np.zeros(walkers, dtype=bool)
-        for split in (order[:, :half], order[:, half:]), (order[:, half:], order[:, :half]):
-            moving = np.sort(split[0], axis=1) + offset  # in the ensemble's order, as emcee's
-            other = split[1] + offset
-            first = random.randint(half, size=(self.groups, half))
-            second = (first + 1 + random.randint(half - 1, size=(self.groups, half))) % half
-            pick = np.arange(self.groups)[:, None]
-            difference = (
-                state.coords[other[pick, second]] - state.coords[other[pick, first]]
-            ).reshape(-1, dimension)
-            gamma = self.g0 * (1.0 + self.sigma * random.randn(difference.shape[0], 1))
-            subset = np.zeros(walkers, dtype=bool)
-            subset[moving.ravel()] = True
-            proposal = state.coords[subset] + gamma * difference
-            log_prob, blobs = model.compute_log_prob_fn(proposal)
-            moved = np.zeros(walkers, dtype=bool)
-            moved[subset] = log_prob - state.log_prob[subset] > np.log(
-                random.rand(proposal.shape[0])
-            )
-            state = self.update(
-                state, State(proposal, log_prob=log_prob, blobs=blobs), moved, subset
-            )
-            accepted |= moved
-        return state, accepted
 
 
 class _GroupOfWalkers:
@@ -186,7 +121,7 @@ def sample_noise_each(
         len(problems) * walkers,
         dimension,
         stream,
-        GroupedDEMove(len(problems)),
+        groups=len(problems),
     )
     groups = [slice(g * walkers, (g + 1) * walkers) for g in range(len(problems))]
     converged = np.zeros(len(problems), dtype=bool)

@@ -29,8 +29,11 @@ from functools import partial
 import emcee
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 import numpy as np
 from arviz_stats.base import array_stats
+from emcee.moves import DEMove
+from emcee.state import State
 
 from .._x64 import require_x64  # float64 before any JAX array
 from ._traced import persistent_jit
@@ -83,47 +86,191 @@ class Diagnostics(eqx.Module):
         }
 
 
-@persistent_jit
-def _walker_log_densities(log_density, model, theta):
-    return jax.vmap(lambda walker: log_density(model, walker))(theta)
-
-
-@persistent_jit
-def _grouped_log_densities(log_density, models, theta):
-    """Walkers (groups x walkers each, dimension), group g's of model g of the stack
-    ``models`` (arrays with a leading axis of groups): vmap over the groups of vmap over
-    their walkers."""
-    groups = jax.tree.leaves(models)[0].shape[0]
+def _densities(log_density, model, grouped: bool, theta):
+    """``log_density(model, walker)`` of each walker of ``theta`` (walkers, dimension), vmapped.
+    ``grouped``: ``model`` is a stack of models (arrays with a leading axis of groups) and the
+    walkers come in as many equal groups, in order, group g's of model g: vmap over the groups
+    of vmap over their walkers."""
+    if not grouped:
+        return jax.vmap(lambda walker: log_density(model, walker))(theta)
+    groups = jax.tree.leaves(model)[0].shape[0]
     by_group = theta.reshape(groups, -1, theta.shape[-1])
     return jax.vmap(
-        lambda model, walkers: jax.vmap(lambda walker: log_density(model, walker))(walkers)
-    )(models, by_group).reshape(-1)
+        lambda own, walkers: jax.vmap(lambda walker: log_density(own, walker))(walkers)
+    )(model, by_group).reshape(-1)
+
+
+@persistent_jit
+def _batch_densities(log_density, model, grouped, theta):
+    return _densities(log_density, model, grouped, theta)
+
+
+@persistent_jit
+def _de_step(log_density, model, grouped, halves, log_probs, pairs, gamma, log_u):
+    """Both halves of a differential-evolution step (:func:`de_halves`) in one compiled call."""
+    return de_halves(
+        jnp,
+        lambda theta: _densities(log_density, model, grouped, theta),
+        halves,
+        log_probs,
+        pairs,
+        gamma,
+        log_u,
+    )
+
+
+class _BatchLogDensity:
+    """``theta (walkers, dimension) -> (walkers,)`` log densities as numpy, for emcee, and
+    :meth:`de_step`, a whole step of :class:`GroupedDEMove` in one compiled call
+    (:func:`batch_log_density`)."""
+
+    def __init__(self, log_density, model, grouped: bool):
+        self._arguments = (log_density, model, grouped)
+        self._specialised = {}
+
+    def _function(self, over, arrays):
+        """``over`` specialised to these arrays' shapes, the model's arrays bound (moved to
+        the device once: each of the sampler's thousands of calls passes only the walkers)."""
+        key = (over.__name__, *(np.shape(array) for array in arrays))
+        if key not in self._specialised:
+            function, leaves = over.specialised(*self._arguments, *arrays)
+            fixed = [jax.device_put(leaf) for leaf in leaves[: -len(arrays)]]
+            self._specialised[key] = partial(function, *fixed)
+        return self._specialised[key]
+
+    def __call__(self, theta):
+        theta = np.asarray(theta, dtype=float)
+        return np.asarray(self._function(_batch_densities, (theta,))(theta))
+
+    def de_step(self, halves, log_probs, pairs, gamma, log_u):
+        """:func:`de_halves` of these arrays (numpy in, numpy out) in one compiled call."""
+        arrays = (halves, log_probs, pairs, gamma, log_u)
+        return jax.tree.map(np.asarray, self._function(_de_step, arrays)(*arrays))
 
 
 def batch_log_density(log_density, model, grouped: bool = False):
     """``theta (walkers, dimension) -> (walkers,)`` log densities ``log_density(model,
-    theta)`` as numpy, for emcee: every walker in one compiled call per step.
+    theta)`` as numpy, for emcee: every walker in one compiled call per step, and a whole
+    step of :class:`GroupedDEMove` (both halves) in one compiled call.
 
     ``log_density`` must be a module-level function (it keys the compilation cache). The
-    function is traced, or loaded from the trace cache (:mod:`._traced`), at the first call,
-    and the model's arrays are moved to the device once: each of the sampler's thousands of
-    calls passes only the walkers' positions. ``grouped``: ``model`` is a stack of models
-    (a leading axis of groups) and the walkers come in as many equal groups, in order, each
-    of its own model (:class:`~bayescal.inference._batched.GroupedDEMove`).
+    functions are traced, or loaded from the trace cache (:mod:`._traced`), at their first
+    call, and the model's arrays are moved to the device once: each of the sampler's
+    thousands of calls passes only the walkers' positions (and the step's random numbers).
+    ``grouped``: ``model`` is a stack of models (a leading axis of groups) and the walkers
+    come in as many equal groups, in order, each of its own model (:class:`GroupedDEMove`).
     """
     require_x64()
-    over = _grouped_log_densities if grouped else _walker_log_densities
-    specialised = {}
+    return _BatchLogDensity(log_density, model, grouped)
 
-    def batch(theta):
-        theta = np.asarray(theta, dtype=float)
-        if theta.shape not in specialised:
-            function, leaves = over.specialised(log_density, model, theta)
-            fixed = [jax.device_put(leaf) for leaf in leaves[:-1]]
-            specialised[theta.shape] = partial(function, *fixed)
-        return np.asarray(specialised[theta.shape](theta))
 
-    return batch
+def de_halves(xp, log_density, halves, log_probs, pairs, gamma, log_u):
+    """One step of emcee's red-blue differential-evolution move (ter Braak 2006;
+    :class:`emcee.moves.DEMove` in :class:`emcee.moves.RedBlueMove`) on an ensemble split into
+    ``groups`` of two halves, written once for numpy and JAX (``xp``).
+
+    ``halves`` (2, groups, half, dimension) and their ``log_probs`` (2, groups, half): the
+    first half of each group moves, each walker to ``x + gamma (x_j - x_i)`` with ``x_i`` and
+    ``x_j`` two distinct walkers of its group's other half, numbered there by ``pairs[0, 0]``
+    and ``pairs[0, 1]`` (pairs: 2 halves, 2, groups, half), ``gamma`` (2, groups, half) its
+    scale, and is accepted where its log density rose by more than ``log_u[0]``, the log of a
+    uniform (Metropolis: the proposal is symmetric); then the second half moves the same way,
+    its differences taken from the first half as updated. ``log_density`` maps (walkers,
+    dimension) to (walkers,), the walkers group by group. Returns the halves, their log
+    densities, which walkers moved (2, groups, half), and whether any proposal was not
+    finite or any log density NaN (emcee raises on either).
+    """
+    halves, log_probs, accepted = list(halves), list(log_probs), []
+    invalid = False
+    for moving in (0, 1):
+        other = halves[1 - moving]
+        first = xp.take_along_axis(other, pairs[moving, 0][..., None], axis=1)
+        second = xp.take_along_axis(other, pairs[moving, 1][..., None], axis=1)
+        proposal = halves[moving] + gamma[moving][..., None] * (second - first)
+        density = log_density(proposal.reshape(-1, proposal.shape[-1])).reshape(proposal.shape[:-1])
+        moved = density - log_probs[moving] > log_u[moving]
+        halves[moving] = xp.where(moved[..., None], proposal, halves[moving])
+        log_probs[moving] = xp.where(moved, density, log_probs[moving])
+        accepted.append(moved)
+        invalid = invalid | xp.any(xp.isnan(density)) | ~xp.all(xp.isfinite(proposal))
+    return xp.stack(halves), xp.stack(log_probs), xp.stack(accepted), invalid
+
+
+class GroupedDEMove(DEMove):
+    """emcee's differential-evolution move (ter Braak 2006; :class:`emcee.moves.DEMove`,
+    gamma ~ gamma0 (1 + sigma z)) within groups: the ensemble is ``groups`` equal groups of
+    walkers, in order, and each group is split at random into two halves, a walker's proposal
+    taking the difference of two distinct walkers of its own group's other half; the first
+    halves move, then the second from the first as updated (:func:`de_halves`). Each group's
+    update is the red-blue update of emcee's move on that group alone (a valid
+    Metropolis-Hastings update of each walker given the others), so that groups sampling
+    different posteriors never mix; one group is emcee's ``DEMove`` itself (its proposal
+    distribution and acceptance; its random numbers are drawn in another order).
+
+    The random numbers are drawn from emcee's generator (``model.random``) as numpy arrays;
+    a log density from :func:`batch_log_density` then makes the whole step, both halves, in
+    one compiled call (:meth:`_BatchLogDensity.de_step`, where emcee's ``DEMove`` made two
+    with emcee's Python per half between them); any other log density is called once a half.
+
+    Parameters
+    ----------
+    groups : int
+        The number of groups; the walkers must divide into them, at least four a group.
+    sigma : float
+        The relative spread of gamma (emcee's default).
+    gamma0 : float, optional
+        The mean of gamma; default 2.38 / sqrt(2 dimension).
+    """
+
+    def __init__(self, groups: int = 1, sigma: float = 1e-5, gamma0: float | None = None):
+        super().__init__(sigma=sigma, gamma0=gamma0)
+        self.groups = groups
+
+    def propose(self, model, state):
+        """Move each group's two halves in turn; returns the state and which walkers moved."""
+        walkers = state.coords.shape[0]
+        size = walkers // self.groups
+        if size * self.groups != walkers or size < 4 or size % 2:
+            raise ValueError(
+                f"{walkers} walkers do not divide into {self.groups} groups of an even "
+                "number of at least four"
+            )
+        self.setup(state.coords)
+        random, half, shape = model.random, size // 2, (2, self.groups, size // 2)
+        # Each group's walkers in a random order, its halves each in the ensemble's order.
+        order = np.argsort(random.rand(self.groups, size), axis=1)
+        offset = (np.arange(self.groups) * size)[:, None]
+        index = np.stack([np.sort(order[:, :half], axis=1), np.sort(order[:, half:], axis=1)])
+        index = index + offset
+        # Two distinct walkers of the other half: emcee's pairs off the diagonal, uniformly.
+        first = random.randint(half, size=shape)
+        second = (first + 1 + random.randint(half - 1, size=shape)) % half
+        gamma = self.g0 * (1.0 + self.sigma * random.randn(*shape))
+        log_u = np.log(random.rand(*shape))
+        arrays = (
+            state.coords[index],
+            state.log_prob[index],
+            np.stack([first, second], axis=1),
+            gamma,
+            log_u,
+        )
+        step = getattr(model.log_prob_fn, "de_step", None)
+        if step is None:
+
+            def densities(theta):
+                return np.asarray(model.log_prob_fn(theta), dtype=float)
+
+            halves, log_probs, moved, invalid = de_halves(np, densities, *arrays)
+        else:
+            halves, log_probs, moved, invalid = step(*arrays)
+        if invalid:  # as emcee's own moves
+            raise ValueError("a proposal was not finite, or its log probability NaN")
+        coords, log_prob = state.coords.copy(), state.log_prob.copy()
+        coords[index] = halves
+        log_prob[index] = log_probs
+        accepted = np.zeros(walkers, dtype=bool)
+        accepted[index] = moved
+        return State(coords, log_prob=log_prob, blobs=state.blobs), accepted
 
 
 def walker_count(dimension: int, requested: int = 32) -> int:
@@ -212,16 +359,12 @@ def long_enough(tau, steps: int) -> bool:
     return bool(np.all(np.isfinite(tau)) and steps > AUTOCORR_MULTIPLE * np.max(tau))
 
 
-def ensemble(log_posterior_batch, n_walkers: int, dimension: int, rng, move=None):
-    """emcee's ensemble, its log densities vectorised, seeded from ``rng``: with
-    differential-evolution moves, or ``move`` (a grouped one,
-    :class:`~bayescal.inference._batched.GroupedDEMove`)."""
+def ensemble(log_posterior_batch, n_walkers: int, dimension: int, rng, groups: int = 1):
+    """emcee's ensemble, its log densities vectorised, seeded from ``rng``, moved by
+    differential evolution (:class:`GroupedDEMove`, within ``groups`` groups of walkers): a
+    step one compiled call where ``log_posterior_batch`` is :func:`batch_log_density`'s."""
     sampler = emcee.EnsembleSampler(
-        n_walkers,
-        dimension,
-        log_posterior_batch,
-        vectorize=True,
-        moves=emcee.moves.DEMove() if move is None else move,
+        n_walkers, dimension, log_posterior_batch, vectorize=True, moves=GroupedDEMove(groups)
     )
     # emcee wraps the log density to print a traceback of any exception it raises before
     # passing it on: an interruption (Ctrl-C, the command line's SIGTERM) is to end the run

@@ -76,7 +76,12 @@ from scipy import fft
 from .. import _x64  # noqa: F401  (float64 before any JAX array)
 from .._caches import kept_array
 from .._errors import InputError
-from ..classical._periodogram import TAPER_FRACTION, fast_length_at_most, tukey_window
+from ..classical._periodogram import (
+    TAPER_FRACTION,
+    fast_length_at_most,
+    tapered_transform,
+    tukey_window,
+)
 from ..recording._series import gap_free_runs, is_spooled, read, series_size
 
 BIN_WIDTH = 0.02
@@ -383,8 +388,7 @@ def spectral_summary(
         length = increments.size
         layout = _layout(length, float(rate_hz), taper_fraction, bin_width, exclude)
         taper, lows, keep = layout.taper, layout.lows, layout.keep
-        mean = float(np.dot(taper, increments) / layout.taper_sum)
-        transform = fft.rfft(taper * (increments - mean))
+        mean, transform = tapered_transform(increments, taper)
         periodogram = np.abs(transform) ** 2 / layout.norm
         n_frequencies = layout.n_frequencies
         if regressors is not None:

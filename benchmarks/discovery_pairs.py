@@ -106,6 +106,28 @@ def _step_for(ratio: float, walk: float) -> float:
     return math.sqrt(2 * ratio * walk * math.sqrt(walk * walk + 4 * WHITE_SD**2))
 
 
+WALK_MULTIPLE = (2.0, 3.0)
+"""The range of a walk's expected log likelihood ratio beside flicker, in multiples of what
+the search charges it (:func:`charges`), as a step's beside a walk (:data:`STEP_MULTIPLE`)."""
+
+
+def _walk_for(ratio: float, truth: dict, n: int) -> float:
+    """The walk's per-sample step (deg/s) whose expected log likelihood ratio beside the
+    flicker of ``truth`` is ``ratio`` (:func:`information`'s, solved for the step: it grows
+    with the step, the walk's spectrum K^2 / (4 pi^2 f^2) crossing flicker's B^2 / (2 pi f)
+    at f = K^2 / (2 pi B^2), searched between 2 / T and 200 / T)."""
+    from scipy import optimize
+
+    nu = np.arange(1, n // 2 + 1) / n
+
+    def excess(log_crossing):
+        walk = truth["flicker"] * math.sqrt(2 * math.pi * math.exp(log_crossing) / n)
+        return _without("rate_random_walk", truth | {"walk": walk}, nu) - ratio
+
+    log_crossing = optimize.brentq(excess, math.log(2.0), math.log(200.0), xtol=1e-3)
+    return truth["flicker"] * math.sqrt(2 * math.pi * math.exp(log_crossing) / n)
+
+
 def charges(n: int) -> dict:
     """term -> what the search charges it on a record of ``n`` samples: its Schwarz cost
     (0.5 log of the record's frequencies per continuous parameter), the log of the values a
@@ -139,10 +161,9 @@ def draw(pair: str, rng, minutes: float) -> tuple[np.ndarray, dict]:
         case "rate_random_walk+bias_instability":
             truth["flicker"] = rng.uniform(0.15, 0.25) * WHITE_SD
             flicker = bc.NoiseModel(RATE, B=truth["flicker"])
-            # The walk's two-sided spectrum K^2 / (4 pi^2 f^2) crosses flicker's B^2 / (2 pi f)
-            # at f = K^2 / (2 pi B^2): put that at 6-10 / T.
-            crossing = rng.uniform(10, 14) / (n / RATE)
-            truth["walk"] = truth["flicker"] * math.sqrt(2 * math.pi * crossing / RATE)
+            # The walk whose expected log LR beside flicker is that multiple of its charge.
+            multiple = rng.uniform(*WALK_MULTIPLE)
+            truth["walk"] = _walk_for(multiple * charges(n)["rate_random_walk"], truth, n)
             values += np.cumsum(truth["walk"] * rng.standard_normal(n))
             values += flicker.simulate(n, seed=int(rng.integers(2**31)))
         case "gauss_markov+rate_random_walk":

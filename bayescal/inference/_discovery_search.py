@@ -29,16 +29,15 @@ users in docs/guide/discovery.md):
    means, AIC-penalised) and the standard error of that gain are reported beside it;
 4. repeat until every check passes (nothing is left to explain) or no term is decisive, and
    report which located mismatches are gone. Once a term is accepted, an earlier one whose
-   round did not decide it against its runner-up, and whose time constant the new term
-   moved, gives way to the best other candidate beside the rest where that scores higher
-   (:func:`_revisited`); where the search stops on a candidate
-   that is not decisive but closes every check, the findings are judged beside it
-   (:func:`_closing`). Where every check passes, or no term is
-   decisive and the level scan is the one check failing, one more round tries a bias step
-   where the level scan sees one standing out most, named only on its own decisive Bayes
-   factor with every check passing with it: a slow term (a random walk) allows a change of
-   level anywhere, so the checks pass beside a step they do not locate, or the level scan
-   locates it as a stretch that ends at the step, for which no step is proposed.
+   round did not decide it against its runner-up gives way to the best other candidate
+   beside the rest where that scores higher (:func:`_revisited`); where the search stops on
+   a candidate that is not decisive but closes every check, the findings are judged beside
+   it (:func:`_closing`). Where every check passes, or no term is decisive and the level
+   scan is the one check failing, one more round tries a bias step where the level scan sees
+   one standing out most, named only on its own decisive Bayes factor with every check
+   passing with it: a slow term (a random walk) allows a change of level anywhere, so the
+   checks pass beside a step they do not locate, or the level scan locates it as a stretch
+   that ends at the step, for which no step is proposed.
 
 Because the candidates compete on the same data, the signatures decide between effects that
 raise the same statistic: a thermal polynomial only explains what follows the temperature, a
@@ -461,15 +460,12 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
             if len(ranked) > 1
             else ()
         )
-        moved = [_moved(finding, fit.spec, search) for finding in findings]
-        # A term whose time constant the new one moved is not the term its round accepted.
-        revisit = [new is not old for new, old in zip(moved, findings, strict=True)]
-        findings = [
-            *moved,
-            Finding(fit.spec.effects[-1], fit, log_bayes_factor, gain, gain_se, runner_up, search),
-        ]
+        findings = [_moved(finding, fit.spec, search) for finding in findings]
+        findings.append(
+            Finding(fit.spec.effects[-1], fit, log_bayes_factor, gain, gain_se, runner_up, search)
+        )
         current = fit
-        findings, current = _revisited(context, findings, revisit, current, report)
+        findings, current = _revisited(context, findings, current, report)
         checks = run_checks(current, context.data)
     # Also where no term was decisive and the level scan is the one check left failing: it
     # can locate a step beside a walk as a stretch that ends at it, which no step is proposed
@@ -531,26 +527,26 @@ def _closing(context: Context, fit: ModelFit, log_bayes_factor: float) -> tuple:
 
 
 def _revisited(
-    context: Context, findings: list, revisit: list, current: ModelFit, report
+    context: Context, findings: list, current: ModelFit, report
 ) -> tuple[list, ModelFit]:
     """``findings`` and ``current`` (the model with the term just accepted, the last of
-    ``findings``) with each earlier finding marked in ``revisit`` (its time constant moved
-    beside the new term: :func:`_moved`) whose round did not decide it against its
+    ``findings``) with each earlier finding whose round did not decide it against its
     runner-up (their log Bayes factors within the decisive log 100) replaced by the best
     other candidate beside the rest of the model, where that scores higher than ``current``
     and is decisive beside the rest.
 
-    The search adds one term a round, and a Gauss-Markov term's time constant is searched
-    again beside a walk (:func:`_beside_time_constant`): accepted on a near tie, the term can
-    move to take what belongs to another. Flicker and a walk (the pair study's seeds 14 and
-    30 as first drawn): the first round's best, a Gauss-Markov term (tau 31 s, 33 s), led the
-    walk by 0.1 and 0.2 and flicker by 3.8 and 1.3; beside the walk its time constant moved
-    to 0.27 s and 0.20 s to take flicker's power at high frequency, and the search ended on
-    Gauss-Markov and the walk, whose score is 3.3 and 7.1 below flicker and the walk's."""
-    for index, (finding, moved) in enumerate(zip(findings[:-1], revisit, strict=True)):
+    The search adds one term a round: a term accepted on a near tie can take what belongs to
+    a term that comes later, and the model it ends on score below the pair it should have
+    found. Flicker and a walk (the pair study's seeds 14 and 30 as first drawn): the first
+    round's best, a Gauss-Markov term (tau 31 s, 33 s), led the walk by 0.1 and 0.2 and
+    flicker by 3.8 and 1.3; beside the walk its time constant moved to 0.27 s and 0.20 s
+    (:func:`_beside_time_constant`) to take flicker's power at high frequency, and the search
+    ended on Gauss-Markov and the walk, 3.3 and 7.1 below flicker and the walk. On seed 0 as
+    redrawn the Gauss-Markov term led the walk by 1.3, and flicker (log BF 7.2) came beside
+    it where the walk belonged."""
+    for index, finding in enumerate(findings[:-1]):
         runner_up = finding.runner_up
-        tied = runner_up and finding.log_bayes_factor - runner_up[1] <= DECISIVE_LOG_BAYES_FACTOR
-        if not (moved and tied):
+        if not runner_up or finding.log_bayes_factor - runner_up[1] > DECISIVE_LOG_BAYES_FACTOR:
             continue
         rest = context.fit(
             ModelSpec(tuple(e for e in current.spec.effects if e is not finding.effect))

@@ -28,16 +28,16 @@ users in docs/guide/discovery.md):
    (pointwise over independent frequency bins and one-block-ahead predictions of the block
    means, AIC-penalised) and the standard error of that gain are reported beside it;
 4. repeat until every check passes (nothing is left to explain) or no term is decisive, and
-   report which located mismatches are gone. Once a term is accepted, an earlier one whose
-   round did not decide it against its runner-up gives way to the best other candidate
-   beside the rest where that scores higher (:func:`_revisited`); where the search stops on
-   a candidate that is not decisive but closes every check, the findings are judged beside
-   it (:func:`_closing`). Where every check passes, or no term is decisive and the level
-   scan is the one check failing, one more round tries a bias step where the level scan sees
-   one standing out most, named only on its own decisive Bayes factor with every check
-   passing with it: a slow term (a random walk) allows a change of level anywhere, so the
-   checks pass beside a step they do not locate, or the level scan locates it as a stretch
-   that ends at the step, for which no step is proposed.
+   report which located mismatches are gone. Once a term is accepted, an earlier
+   Gauss-Markov term whose round did not decide it against its runner-up gives way to the
+   best other candidate beside the rest where that scores higher (:func:`_revisited`); where
+   the search stops on a candidate that is not decisive but closes every check, the findings
+   are judged beside it (:func:`_closing`). Where every check passes, or no term is decisive
+   and the level scan is the one check failing, one more round tries a bias step where the
+   level scan sees one standing out most, named only on its own decisive Bayes factor with
+   every check passing with it: a slow term (a random walk) allows a change of level
+   anywhere, so the checks pass beside a step they do not locate, or the level scan locates
+   it as a stretch that ends at the step, for which no step is proposed.
 
 Because the candidates compete on the same data, the signatures decide between effects that
 raise the same statistic: a thermal polynomial only explains what follows the temperature, a
@@ -530,10 +530,16 @@ def _revisited(
     context: Context, findings: list, current: ModelFit, report
 ) -> tuple[list, ModelFit]:
     """``findings`` and ``current`` (the model with the term just accepted, the last of
-    ``findings``) with each earlier finding whose round did not decide it against its
-    runner-up (their log Bayes factors within the decisive log 100) replaced by the best
-    other candidate beside the rest of the model, where that scores higher than ``current``
-    and is decisive beside the rest.
+    ``findings``) with each earlier Gauss-Markov finding whose round did not decide it
+    against its runner-up (their log Bayes factors within the decisive log 100) replaced by
+    the best other candidate beside the rest of the model, where that scores higher than
+    ``current`` and is decisive beside the rest.
+
+    Only a Gauss-Markov term: its time constant lets it stand in for a walk, or for flicker
+    over a band, and moves beside a walk (:func:`_beside_time_constant`). Revisited too, a
+    walk accepted first beside a step gave way to a Gauss-Markov term of a long time
+    constant (the step pair's seeds 4031 and 4042: over the record the same process as the
+    walk, scoring a little higher), two misses where the pair was named.
 
     The search adds one term a round: a term accepted on a near tie can take what belongs to
     a term that comes later, and the model it ends on score below the pair it should have
@@ -546,7 +552,9 @@ def _revisited(
     it where the walk belonged."""
     for index, finding in enumerate(findings[:-1]):
         runner_up = finding.runner_up
-        if not runner_up or finding.log_bayes_factor - runner_up[1] > DECISIVE_LOG_BAYES_FACTOR:
+        if not isinstance(finding.effect, GaussMarkov) or not runner_up:
+            continue
+        if finding.log_bayes_factor - runner_up[1] > DECISIVE_LOG_BAYES_FACTOR:
             continue
         rest = context.fit(
             ModelSpec(tuple(e for e in current.spec.effects if e is not finding.effect))

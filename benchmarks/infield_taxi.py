@@ -4,12 +4,16 @@ cover, how far the taxi narrows the east bias level, the ablations, and what the
 in free inertial navigation.
 
     nice -n 10 python benchmarks/infield_taxi.py [--scenarios 100] [--rate 100] [--seed 0]
-        [--aging 4] [--tactical] [--park-s 1200] [--warmup 20:38.6] [--wander 0.5:20]
-        [--gnss SD] [--workers 1] [--no-ablations] [--every 10]
+        [--aging 4] [--aging-shape drift|level] [--tactical] [--park-s 1200]
+        [--warmup 20:38.6] [--wander 0.5:20] [--gnss SD] [--workers 1] [--no-ablations]
+        [--every 10]
 
 Each scenario: benchmarks/infield_alignment.py's park (navigation grade, 20 minutes, latitude
 45 deg, heading 30 deg, warming 20 -> 38.6 degC), aged by ``--aging`` times the calibration's
-sd of c0, then a taxi of 10 minutes at 10 m/s (bc.Taxi): from rest along 30 deg for 330 s, a 90
+sd of c0 (``--aging-shape``: ``drift``, the default, every coefficient by the update's own drift
+model, c_j by N(0, (s / h^j)^2); ``level``, the bias level c0 alone by N(0, s^2); the update is
+not told which and learns s as a user's does; the default keeps every earlier command's figures
+as they were), then a taxi of 10 minutes at 10 m/s (bc.Taxi): from rest along 30 deg for 330 s, a 90
 deg turn at 3 deg/s, 240 s along 120 deg; the vehicle wanders about the centre line
 (second-order Gauss-Markov, ``--wander SD:TAU``, default sd 0.5 m, time constant 20 s; the
 same wander is given to the update, ``wander=(sd, tau)``). Four updates per scenario:
@@ -69,6 +73,7 @@ import time
 
 import numpy as np
 
+from bayescal.navigation._simulate import AGING_SHAPES
 from bayescal.navigation._taxi import WANDER_SD, WANDER_TIME_S
 
 IDEAL_EAST = 0.0040  # deg/h, ../shared/NAVIGATION.md
@@ -216,6 +221,7 @@ def one_scenario(
     wander: tuple[float, float] = WANDER,
     ablations: bool = True,
     gnss: float | None = None,
+    aging_shape: str = "drift",
 ) -> dict:
     import bayescal as bc
     from bayescal.navigation import _alignment
@@ -227,6 +233,7 @@ def one_scenario(
         aged: bc.simulate_park(
             old,
             aging=aged,
+            aging_shape=aging_shape,
             rate_hz=rate,
             taxi=taxi,
             gyro_noise=gyro_noise,
@@ -375,6 +382,7 @@ def scenario(seed: int, options: dict) -> dict:
         options["wander"],
         options["ablations"],
         options["gnss"],
+        options["aging_shape"],
     )
 
 
@@ -417,6 +425,13 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--every", type=int, default=10, help="report every this many")
     parser.add_argument("--aging", type=float, default=4.0, help="in the old sd of c0")
+    parser.add_argument(
+        "--aging-shape",
+        choices=AGING_SHAPES,
+        default="drift",
+        help="what has aged: every coefficient by the update's drift model (drift), or the bias "
+        "level c0 alone (level); the update is not told",
+    )
     parser.add_argument("--tactical", action="store_true", help="ARW 0.05 deg/sqrt(h) gyros")
     parser.add_argument("--park-s", type=float, default=1200.0, help="the park's length, s")
     parser.add_argument("--warmup", default="20:38.6", help="START:END degC over the park")
@@ -441,6 +456,7 @@ def main() -> None:
     options = {
         "rate": args.rate,
         "aging": args.aging,
+        "aging_shape": args.aging_shape,
         "tactical": args.tactical,
         "park": {"duration_s": args.park_s, "warmup": pair(args.warmup, "--warmup")},
         "wander": wander,
@@ -449,7 +465,8 @@ def main() -> None:
     }
     print(
         f"wander sd {wander[0]:g} m, time constant {wander[1]:g} s: cross-track velocity sd "
-        f"{wander[0] / wander[1]:.4g} m/s; {args.workers} worker(s)",
+        f"{wander[0] / wander[1]:.4g} m/s; aging {args.aging:g} sd of c0, shape "
+        f"{args.aging_shape}; {args.workers} worker(s)",
         flush=True,
     )
     started = time.perf_counter()

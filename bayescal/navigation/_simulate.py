@@ -10,10 +10,12 @@ constant: w_ib^b = C_n^b Omega^n and f^b = -C_n^b g^n (g from
 Sensor errors, per axis:
 
 - gyros: bias_i(T) = sum_j c_ij (T - T0_i)^j, a thermal polynomial (the true one: a calibration's
-  coefficients plus its own error, drawn from its covariance, plus aging since, drawn from
-  the drift model of :mod:`bayescal.models._thermal`: delta_j ~ N(0, (s / h^j)^2), s =
-  ``aging`` times the calibration's sd of c_0), then white noise and bias instability (and a
-  rate random walk if asked) from :class:`~bayescal.NoiseModel`;
+  coefficients plus its own error, drawn from its covariance, plus aging since, s =
+  ``aging`` times the calibration's sd of c_0, in one of AGING_SHAPES: ``"drift"``, the drift
+  model of :mod:`bayescal.models._thermal`, delta_j ~ N(0, (s / h^j)^2) on every coefficient;
+  ``"level"``, the bias level alone, delta_0 ~ N(0, s^2), the slope and curvature as
+  calibrated), then white noise and bias instability (and a rate random walk if asked) from
+  :class:`~bayescal.NoiseModel`;
 - accelerometers: a constant bias drawn per axis, white noise and bias instability;
 - temperature: a warm-up T(t) = T_inf - (T_inf - T_start) exp(-t / tau), T_inf set so that the
   park ends at ``warmup[1]``, read without noise; one column for all gyros.
@@ -66,6 +68,10 @@ NAVIGATION_GRADE_ACCEL = {"N": 2e-4, "B": 1e-5}
 """Navigation-grade accelerometer noise, m/s^2: 20 ug/sqrt(Hz) white, 1 ug bias instability."""
 ACCEL_BIAS_SD = 5e-4
 """sd of the accelerometers' constant biases, m/s^2 (50 ug)."""
+AGING_SHAPES = ("drift", "level")
+"""How the simulated aging moves a gyro's polynomial: every coefficient by the update's own
+drift model, or the bias level c_0 alone (a navigation gyro's year-to-year change is mostly its
+level). Both draw the same normals, so c_0's aging is the same under either for one seed."""
 
 
 @dataclass(frozen=True)
@@ -378,19 +384,25 @@ def _gnss(trajectory, sd: float, rate_hz: float, height: float, rng) -> dict:
     }
 
 
-def _true_polynomial(calibration, aging: float, rng) -> dict:
-    """A calibration's coefficients plus its own error and the aging since (module
-    docstring)."""
+def _true_polynomial(calibration, aging: float, rng, aging_shape: str = "drift") -> dict:
+    """A calibration's coefficients plus its own error and the aging since, in
+    ``aging_shape`` (module docstring)."""
     mean = np.asarray(calibration.coefficients, dtype=float)
     covariance = np.asarray(calibration.covariance, dtype=float)
     own = rng.multivariate_normal(np.zeros(mean.size), covariance, method="eigh")
     scale = aging * math.sqrt(covariance[0, 0])
-    shape = _drift_shape(mean.size - 1, calibration.reference, calibration.temperature_range)
+    if aging_shape == "drift":
+        shape = _drift_shape(mean.size - 1, calibration.reference, calibration.temperature_range)
+    else:
+        shape = np.eye(1, mean.size)[0]
+    # Every coefficient's normal is drawn under either shape: the generator's later draws (the
+    # next gyro's, the accelerometers') stay the same.
     drift = scale * shape * rng.standard_normal(mean.size)
     return {
         "coefficients": mean + own + drift,
         "reference": float(calibration.reference),
         "aging_scale": scale,
+        "aging_shape": aging_shape,
     }
 
 
@@ -407,6 +419,7 @@ def simulate_park(
     warmup: tuple[float, float] = (20.0, 38.6),
     warmup_time_constant_s: float = 600.0,
     aging: float = 4.0,
+    aging_shape: str = "drift",
     gyro_noise: dict | None = None,
     accel_noise: dict | None = None,
     accel_bias_sd: float = ACCEL_BIAS_SD,
@@ -436,6 +449,10 @@ def simulate_park(
     aging : float
         How far each gyro's bias has moved since the calibration: the drift scale s in
         multiples of the calibration's sd of c_0.
+    aging_shape : {"drift", "level"}
+        What has aged: ``"drift"`` every coefficient, c_j by N(0, (s / h^j)^2) (h the calibrated
+        range's farthest point from T0: the update's own drift model); ``"level"`` the bias
+        level c_0 alone, by N(0, s^2).
     gyro_noise, accel_noise : dict, optional
         :class:`~bayescal.NoiseModel` parameters (``N``, ``B``, ``K``) in deg/s and m/s^2
         (default: navigation grade, ARW 0.002 deg/sqrt(h)).
@@ -455,7 +472,8 @@ def simulate_park(
     Raises
     ------
     InputError
-        A calibration missing for a gyro, a latitude beyond +-85 deg.
+        A calibration missing for a gyro, a latitude beyond +-85 deg, an unknown
+        ``aging_shape``.
 
     Examples
     --------
@@ -486,6 +504,10 @@ def simulate_park(
             f"the calibration lacks {', '.join(missing)}",
             fix="give one thermal calibration per gyro (gyro_x, gyro_y, gyro_z)",
         )
+    if aging_shape not in AGING_SHAPES:
+        raise InputError(
+            f"aging shape {aging_shape!r}", fix=f"give one of {', '.join(AGING_SHAPES)}"
+        )
     latitude = check_latitude(latitude)
     gyro_noise = NAVIGATION_GRADE_GYRO if gyro_noise is None else gyro_noise
     accel_noise = NAVIGATION_GRADE_ACCEL if accel_noise is None else accel_noise
@@ -503,7 +525,7 @@ def simulate_park(
     rate = attitude.T @ np.asarray(earth_rate_n(math.radians(latitude))) / DEG
     force = attitude.T @ np.array([0.0, 0.0, -gravity])
     keys = jax.random.split(jax.random.PRNGKey(seed), 6)
-    thermal = {name: _true_polynomial(calibration[name], aging, rng) for name in GYROS}
+    thermal = {name: _true_polynomial(calibration[name], aging, rng, aging_shape) for name in GYROS}
     accel_bias = accel_bias_sd * rng.standard_normal(3)
     columns = {"time": time}
     trajectory = None

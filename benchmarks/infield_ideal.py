@@ -3,7 +3,8 @@ what no update can beat on benchmarks/infield_taxi.py's scenarios, and where the
 comes from.
 
     nice -n 10 python benchmarks/infield_ideal.py [--scenarios 8] [--rate 10] [--seed 0]
-        [--aging 4] [--park-s 1200] [--warmup 20:38.6] [--wander 0.2:20] [--drift-prior-scale K]
+        [--aging 4] [--aging-shape drift|level] [--park-s 1200] [--warmup 20:38.6]
+        [--wander 0.2:20] [--drift-prior-scale K]
 
 Each scenario is benchmarks/infield_taxi.py's (navigation grade, a park of ``--park-s`` warming
 over ``--warmup``, aged by ``--aging`` times the calibration's sd of c0, a 10-minute known-track
@@ -12,7 +13,9 @@ runs it) and with s given at the simulator's own value (the hyperparameter's ora
 
 The ideal. Given s, the update's posterior of the nine coefficients is one Gaussian: the exact
 posterior under the simulator's own prior (the old calibration's covariance plus the drift
-N(0, (s / h^j)^2) that the simulator draws the aging from: the same ``_drift_shape``). Its mean
+N(0, (s / h^j)^2) that the simulator draws the aging from: the same ``_drift_shape``; with
+``--aging-shape level``, the simulator's aging of c0 alone, N(0, s^2) on each level and none on
+the slopes and curvatures, which the update itself is not told). Its mean
 is the Bayes estimate, which minimizes the expected squared error of every linear functional
 of the coefficients over the prior's draws, so its expected mean square over the range
 (15-45 degC), tr(Sigma_post M) with M the range's mean of p(T) p(T)^T, p(T) = (T - T0)^j, is
@@ -42,6 +45,8 @@ import time
 import numpy as np
 from infield_taxi import GYROS, LEGS, RANGE, pair, park_truth
 
+from bayescal.navigation._simulate import AGING_SHAPES
+
 DEG_PER_HOUR = math.radians(1.0) / 3600.0  # rad/s per deg/h
 PER_HOUR = 1 / 3600.0  # deg/s per deg/h
 SHOWN = np.array([15.0, 30.0, 45.0])  # degC: the range's ends and T0
@@ -67,13 +72,19 @@ def captured_alignment():
         _infield.sample_alignment = original
 
 
-def exact_posterior(found: dict, filtered, drift: float):
+def exact_posterior(found: dict, filtered, drift: float, aging_shape: str = "drift"):
     """The coefficients' prior and posterior covariance at drift scale ``drift`` (rad/s), nine
-    by nine (gyro x, y, z; c0, c1, c2 each), (deg/h per degC^j)^2."""
+    by nine (gyro x, y, z; c0, c1, c2 each), (deg/h per degC^j)^2, under the simulator's
+    ``aging_shape``: the update's drift on every coefficient, or on each level c0 alone."""
+    import equinox as eqx
+
     from bayescal.navigation._alignment import drift_problem
 
     alignment, location = found["alignment"], found["location"]
     problem = drift_problem(alignment, filtered, math.exp(location), location)
+    if aging_shape == "level":
+        levels = np.arange(problem.shape.size) % 3 == 0
+        problem = eqx.tree_at(lambda p: p.shape, problem, problem.shape * levels)
     scale = np.asarray(alignment.model.scale)[alignment.layout.all_coefficients] / DEG_PER_HOUR
     theta = np.array([math.log(drift) if drift > 0 else -np.inf])
     posterior = np.asarray(problem.conditional(theta)[1])
@@ -110,6 +121,7 @@ def one_scenario(seed: int, options: dict) -> dict:
     park = bc.simulate_park(
         old,
         aging=options["aging"],
+        aging_shape=options["aging_shape"],
         rate_hz=options["rate"],
         taxi=taxi,
         seed=seed,
@@ -175,7 +187,9 @@ def one_scenario(seed: int, options: dict) -> dict:
         / PER_HOUR**2
     )
     # The last update's (s given): its filter run and alignment give the exact posterior.
-    prior, posterior = exact_posterior(found, result.posterior.filtered, math.radians(drift))
+    prior, posterior = exact_posterior(
+        found, result.posterior.filtered, math.radians(drift), options["aging_shape"]
+    )
     powers = (RANGE - 30.0)[:, None] ** np.arange(3)
     weights = powers.T @ powers / RANGE.size
     attitude = park.truth["attitude"]
@@ -289,6 +303,13 @@ def main() -> None:
     parser.add_argument("--rate", type=float, default=10.0, help="the IMU's rate, Hz")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--aging", type=float, default=4.0, help="in the old sd of c0")
+    parser.add_argument(
+        "--aging-shape",
+        choices=AGING_SHAPES,
+        default="drift",
+        help="what has aged: every coefficient by the update's drift model (drift), or the bias "
+        "level c0 alone (level); the update is not told, the ideal is",
+    )
     parser.add_argument("--park-s", type=float, default=1200.0, help="the park's length, s")
     parser.add_argument("--warmup", default="20:38.6", help="START:END degC over the park")
     parser.add_argument("--wander", default="0.2:20", help="SD:TAU, m and s")
@@ -302,6 +323,7 @@ def main() -> None:
     options = {
         "rate": args.rate,
         "aging": args.aging,
+        "aging_shape": args.aging_shape,
         "park": {"duration_s": args.park_s, "warmup": pair(args.warmup, "--warmup")},
         "wander": pair(args.wander, "--wander"),
         "drift_prior_scale": args.drift_prior_scale,

@@ -518,7 +518,8 @@ def test_a_position_reference_that_cannot_be_used_is_refused(run_cli, old, taxi_
 def test_the_taxi_benchmark_gives_its_wander_to_the_vehicle_and_to_the_update(monkeypatch, old):
     """benchmarks/infield_taxi.py's ``--wander SD:TAU`` reaches both the simulated vehicle
     (bc.Taxi's wander_sd, wander_time_s) and every taxi update (``wander=(sd, tau)``), and
-    ``--no-ablations`` leaves the two updates the main figures need (taxi, not aged). The
+    ``--no-ablations`` leaves the two updates the main figures need (taxi, not aged), and
+    ``--aging-shape`` reaches the simulated sensor (the update is not told it). The
     simulator and the update are stand-ins here: what is tested is the wiring, which decides
     whether the figure is measured at the wander it is said to be."""
     taxi = load_benchmark("infield_taxi")
@@ -530,7 +531,9 @@ def test_the_taxi_benchmark_gives_its_wander_to_the_vehicle_and_to_the_update(mo
     )
 
     def simulate_park(calibrations, taxi, **options):
-        simulated.append((taxi.wander_sd, taxi.wander_time_s, options["aging"]))
+        simulated.append(
+            (taxi.wander_sd, taxi.wander_time_s, options["aging"], options["aging_shape"])
+        )
         return park
 
     def infield_update(recording, calibrations, **options):
@@ -540,10 +543,13 @@ def test_the_taxi_benchmark_gives_its_wander_to_the_vehicle_and_to_the_update(mo
     monkeypatch.setattr(bc, "infield_update", infield_update)
     monkeypatch.setattr(taxi, "summarize", lambda *args: {})
     monkeypatch.setattr(taxi, "payoff", lambda *args: {})
-    rows = taxi.one_scenario(7, old, 10.0, 4.0, wander=(0.2, 20.0), ablations=False)
+    rows = taxi.one_scenario(
+        7, old, 10.0, 4.0, wander=(0.2, 20.0), ablations=False, aging_shape="level"
+    )
     assert list(rows) == ["taxi", "not aged"]
-    assert simulated == [(0.2, 20.0, 4.0), (0.2, 20.0, 0.0)]
+    assert simulated == [(0.2, 20.0, 4.0, "level"), (0.2, 20.0, 0.0, "level")]
     assert [u["wander"] for u in updates] == [(0.2, 20.0)] * 2
+    assert not any("aging_shape" in u for u in updates)
     assert all(u["seed"] == 7 and u["taxi"] == (1200.0, 1800.0) for u in updates)
     updates.clear()
     rows = taxi.one_scenario(7, old, 10.0, 4.0)
@@ -739,3 +745,62 @@ def test_the_filters_offset_and_walk_carry_the_flickers_share_of_the_tactical_le
     assert abs(actual / claimed - 1) < 0.02
     claimed, actual = sds["white only"]
     assert actual / claimed > 1.2
+
+
+def test_the_level_aging_moves_only_c0_and_the_drift_aging_draws_as_before(old):
+    """The simulator's aging shapes (issue 36's "aged by 4x the old sd"): ``level`` moves each
+    gyro's c0 alone, by N(0, (aging sd(c0))^2), and leaves the slope and curvature as
+    calibrated; ``drift`` (the default) moves c_j by N(0, (aging sd(c0) / h^j)^2), h = 10 degC
+    (20-40 degC about 30), and draws exactly what it drew before the shapes existed: the
+    calibration's own error (its covariance, eigh) then one normal per coefficient, per gyro,
+    from the seed's generator, so the benchmarks' earlier figures reproduce. Both shapes draw
+    the same normals: for one seed c0 ages alike and the rest of the record is the same."""
+    from bayescal.navigation._simulate import _true_polynomial
+
+    calibration, aging, count = old["gyro_x"], 4.0, 4000
+    sd_c0 = math.sqrt(calibration.covariance[0, 0])
+    moved = {}
+    for shape in ("drift", "level"):
+        aged, kept = np.random.default_rng(11), np.random.default_rng(11)
+        moved[shape] = np.array(
+            [
+                np.subtract(
+                    _true_polynomial(calibration, aging, aged, shape)["coefficients"],
+                    _true_polynomial(calibration, 0.0, kept, shape)["coefficients"],
+                )
+                for _ in range(count)
+            ]
+        )
+    # The sample sd of 4000 normals is within 5 % of the truth but at 4.5 of its sds.
+    np.testing.assert_allclose(moved["level"][:, 0].std(), aging * sd_c0, rtol=0.05)
+    assert np.all(moved["level"][:, 1:] == 0)
+    np.testing.assert_allclose(
+        moved["drift"].std(axis=0), aging * sd_c0 / 10.0 ** np.arange(3), rtol=0.05
+    )
+    np.testing.assert_array_equal(moved["level"][:, 0], moved["drift"][:, 0])
+
+    rng = np.random.default_rng(3)
+    expected = {}
+    for name in GYROS:
+        covariance = np.asarray(old[name].covariance)
+        own = rng.multivariate_normal(np.zeros(3), covariance, method="eigh")
+        drift = aging * math.sqrt(covariance[0, 0]) / 10.0 ** np.arange(3)
+        drift = drift * rng.standard_normal(3)
+        expected[name] = np.asarray(old[name].coefficients) + own + drift
+    parks = {
+        shape: bc.simulate_park(old, duration_s=5.0, rate_hz=10.0, seed=3, **options)
+        for shape, options in (("default", {}), ("level", {"aging_shape": "level"}))
+    }
+    for name in GYROS:
+        default = parks["default"].truth["thermal"][name]
+        level = parks["level"].truth["thermal"][name]
+        np.testing.assert_array_equal(default["coefficients"], expected[name])
+        assert default["aging_shape"] == "drift" and level["aging_shape"] == "level"
+        assert level["coefficients"][0] == default["coefficients"][0]
+        assert np.all(level["coefficients"][1:] != default["coefficients"][1:])
+    for column in ("acc_x", "acc_y", "acc_z", "temperature"):
+        np.testing.assert_array_equal(
+            parks["level"].recording.columns[column], parks["default"].recording.columns[column]
+        )
+    with pytest.raises(bc.InputError, match="aging shape"):
+        bc.simulate_park(old, duration_s=5.0, rate_hz=10.0, aging_shape="slope")

@@ -91,8 +91,17 @@ def test_a_term_accepted_on_a_near_tie_gives_way_to_the_one_that_scores_higher()
     3.8; beside the walk its time constant moved to 0.27 s to take flicker's power, and the
     search ended on Gauss-Markov and the walk, 3.3 below flicker and the walk. An earlier
     term its round did not decide against its runner-up is now revisited once the next is
-    in: flicker takes its place, the pair named exactly."""
+    in: flicker takes its place, the pair named exactly.
+
+    The walk, accepted beside the Gauss-Markov term flicker took the place of, kept that
+    round's numbers: flicker (in the final model) as its runner-up, its log Bayes factor
+    (25.0) and fit those beside the Gauss-Markov term. Every finding's log Bayes factor is
+    now against the final model without it, its fit the final model, its runner-up a term
+    not in it; the walk's runner-up the best other candidate beside the rest (one run of
+    discovery for both: a minute)."""
     import bayescal as bc
+    from bayescal.inference._discovery_search import candidate_fits
+    from bayescal.models._composite import ModelSpec
 
     found = bc.discover(
         _walk_as_first_redrawn(14), pairs.RATE, unit="deg/s", posterior=False, seed=14
@@ -101,6 +110,27 @@ def test_a_term_accepted_on_a_near_tie_gives_way_to_the_one_that_scores_higher()
         "bias_instability",
         "rate_random_walk",
     ]
+    result = found.result
+    final, context = result.final, result.context
+    assert [finding.name for finding in result.findings] == ["bias_instability", "rate_random_walk"]
+
+    def rest(name):
+        return context.fit(ModelSpec(tuple(e for e in final.spec.effects if e.name != name)))
+
+    for finding in result.findings:
+        assert finding.fit.spec.terms() == final.spec.terms()
+        assert finding.fit.schwarz == pytest.approx(final.schwarz, abs=1e-6)
+        log_bayes_factor = final.schwarz - rest(finding.name).schwarz
+        assert finding.log_bayes_factor == pytest.approx(log_bayes_factor, abs=1e-6)
+        assert not final.spec.has(finding.runner_up[0])
+    walk = rest("rate_random_walk")
+    others = {
+        name: float(fit.schwarz - walk.schwarz)
+        for name, (fit, _) in candidate_fits(context, walk).items()
+        if name != "rate_random_walk"
+    }
+    best = max(others, key=others.get)
+    assert result.findings[1].runner_up == (best, pytest.approx(others[best], abs=1e-6))
 
 
 def test_flicker_is_kept_beside_a_walk_that_closes_the_checks_undecided():
@@ -117,7 +147,7 @@ def test_flicker_is_kept_beside_a_walk_that_closes_the_checks_undecided():
     )
     result = search_effects(data, seed=12)
     assert [finding.name for finding in result.findings] == ["bias_instability"]
-    assert not result.withdrawn and result.undecided[0] == "rate_random_walk"
+    assert not result.withdrawn and result.undecided.name == "rate_random_walk"
 
 
 def test_bounds_are_clopper_pearson():

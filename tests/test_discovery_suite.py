@@ -30,7 +30,8 @@ def test_expected_evidence_for_a_thermal_bias_matches_what_discovery_observes(hi
     expected = suite.expected_log_bayes_factors(truth, rate, values.size, temperature)
     found = bc.discover(values, rate, temperature=temperature, unit="deg/s", posterior=False)
     observed = {effect.name: effect.evidence["log_bayes_factor"] for effect in found.effects}
-    observed |= dict([found.result.undecided]) if found.result.undecided else {}
+    undecided = found.result.undecided
+    observed |= {undecided.name: undecided.log_bayes_factor} if undecided else {}
     gross = expected["thermal_bias"] + 0.5 * math.log(values.size / 2)
     assert abs(observed["thermal_bias"] - expected["thermal_bias"]) < 3 * math.sqrt(2 * gross)
     named = "thermal_bias" in [effect.name for effect in found.effects]

@@ -319,11 +319,11 @@ def unexplained_of(result: SearchResult, still_failing: list[str]) -> dict:
             for finding in result.disagreeing
         ]
     if result.undecided:
-        name, score, *against = result.undecided
+        name, score = result.undecided.name, result.undecided.log_bayes_factor
         unexplained["best_candidate"] = name
         unexplained["log_bayes_factor"] = score
-        if against:
-            located = against[0]
+        located = result.undecided.against
+        if located is not None:
             unexplained["against"] = {
                 "shape": located.shape,
                 "time_s": located.start_s

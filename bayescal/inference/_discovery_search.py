@@ -30,7 +30,8 @@ users in docs/guide/discovery.md):
 4. repeat until every check passes (nothing is left to explain) or no term is decisive, and
    report which located mismatches are gone. Once a term is accepted, an earlier
    Gauss-Markov term whose round did not decide it against its runner-up gives way to the
-   best other candidate beside the rest where that scores higher (:func:`_revisited`); where
+   best other candidate beside the rest where that scores higher (:func:`_revisited`; the
+   findings after it are judged again in the model that holds them); where
    the search stops on a candidate that is not decisive but closes every check, the findings
    are judged beside it (:func:`_closing`). Where every check passes, or no term is decisive
    and the level scan is the one check failing, one more round tries a bias step where the
@@ -131,6 +132,33 @@ class Finding(eqx.Module):
         return self.effect.name
 
 
+@dataclasses.dataclass(frozen=True)
+class Undecided:
+    """The best candidate where the search stopped with a check still failing and no term
+    named for it (:func:`_search`): either no candidate was decisive, or the best lost to a
+    departure the level scan located (:func:`_named_against`)."""
+
+    name: str
+    """The candidate's effect."""
+    log_bayes_factor: float
+    """Its log Bayes factor: against the model without it, or (with ``against``) against
+    that model with the located departure in its place."""
+    against: Effect | None = None
+    """The located departure
+    (:class:`~bayescal.inference._located.LocatedDeparture`) it did not beat; None where it
+    was not decisive."""
+    closing: Effect | None = None
+    """Its term, where it was not decisive but its evidence favours it and every check
+    passes with it (:func:`_closing`); None otherwise."""
+
+    @property
+    def beside(self) -> tuple[Effect, ...]:
+        """What the findings are judged beside (:func:`search_effects`): the departure the
+        candidate lost to, or the candidate's term where it closes every check; empty
+        otherwise."""
+        return tuple(effect for effect in (self.against, self.closing) if effect is not None)
+
+
 class SearchResult(eqx.Module):
     """What the search found (:func:`search_effects`): the fits, the findings, the checks."""
 
@@ -144,11 +172,9 @@ class SearchResult(eqx.Module):
     baseline_checks: list
     final_checks: list
     outliers: dict | None
-    undecided: tuple = ()
-    """(name, log Bayes factor) of the best candidate when the search stopped with a check
-    still failing because no term was decisive; with a third item, the located departure
-    (:class:`~bayescal.inference._located.LocatedDeparture`) it did not beat
-    (:func:`_named_against`; the log Bayes factor then against that); empty otherwise."""
+    undecided: Undecided | None = None
+    """The best candidate when the search stopped with a check still failing and no term
+    named for it; None otherwise."""
     saturation: dict | None = None
     withdrawn: tuple = ()
     """Findings the search accepted and then withdrew: a check of their band still failed
@@ -259,17 +285,15 @@ def search_effects(
     )
     checks = baseline_checks if not findings else run_checks(current, data)
     before_search = current
-    current, checks, searched, undecided, closing = _search(
-        context, current, checks, max_effects, report
-    )
+    current, checks, searched, undecided = _search(context, current, checks, max_effects, report)
     # Where a name lost to a located departure (_located), the findings are judged on what
     # is left beside that departure (it is reported unexplained, not held against them);
     # where the best candidate was not decisive but closes every check (_closing), beside
     # that candidate (it is reported undecided, not held against them either).
-    located = undecided[2:] or closing
+    beside = undecided.beside if undecided else ()
     judged = (
-        run_checks(fit_model(context, current.spec.with_effect(*located)), data)
-        if located
+        run_checks(fit_model(context, current.spec.with_effect(*beside)), data)
+        if beside
         else checks
     )
 
@@ -277,7 +301,7 @@ def search_effects(
         """Whether the final model without ``finding`` fails a check that passes with it."""
         passing = {check["name"] for check in judged if check["passed"]}
         spec = before_search.spec
-        for other in (*searched, *located):
+        for other in (*searched, *beside):
             if other is not finding:
                 spec = spec.with_effect(getattr(other, "effect", other))
         without = run_checks(fit_model(context, spec), data)
@@ -297,8 +321,8 @@ def search_effects(
         current = fit_model(context, spec)
         checks = run_checks(current, data)
         judged = (
-            run_checks(fit_model(context, current.spec.with_effect(*located)), data)
-            if located
+            run_checks(fit_model(context, current.spec.with_effect(*beside)), data)
+            if beside
             else checks
         )
     report("checking the final model")
@@ -430,10 +454,9 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
     best candidate is added; once every check passes, or no candidate is decisive with the
     level scan the one check failing, a step at the level scan's strongest
     (:func:`_step_beside`). Returns the final model, its checks,
-    the findings added, ``undecided`` (the best candidate's name and log Bayes factor
-    where none was decisive and a check still fails) and ``closing`` (that candidate's term
-    where it closes every check, :func:`_closing`; empty otherwise)."""
-    findings, undecided, closing = [], (), ()
+    the findings added and :class:`Undecided` where the search stopped with a check failing
+    and no term named for it (else None)."""
+    findings, undecided = [], None
     for _ in range(max_effects):
         if not _failing(checks):
             break  # nothing located: nothing left to explain
@@ -445,14 +468,15 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
         name, (fit, search) = ranked[0]
         log_bayes_factor = fit.schwarz - current.schwarz
         if not log_bayes_factor > DECISIVE_LOG_BAYES_FACTOR:
-            undecided = (name, float(log_bayes_factor))
             closing = _closing(context, fit, log_bayes_factor)
+            undecided = Undecided(name, float(log_bayes_factor), closing=closing)
             break
         located = located_alternative(context, current, fit.spec.effects[-1])
         if located is not None and not _named_against(context, fit, located):
             # A slow term that absorbs one located departure is the nearest name, not the
             # physics: it must beat the departure itself (module _located).
-            undecided = (name, float(fit.schwarz - located.schwarz), located.spec.effects[-1])
+            against = located.spec.effects[-1]
+            undecided = Undecided(name, float(fit.schwarz - located.schwarz), against=against)
             break
         gain, gain_se = _elpd_difference(fit, current)
         runner_up = (
@@ -473,13 +497,13 @@ def _search(context: Context, current: ModelFit, checks, max_effects: int, repor
     # another shape: a sawtooth's Allan deviation at 164 s beside a Gauss-Markov term), nor
     # where a name lost to a located departure (_located judges that one).
     failing = _failing(checks)
-    stuck = len(undecided) == 2 and failing == {BiasStep.located_by}
+    stuck = undecided is not None and undecided.against is None and failing == {BiasStep.located_by}
     if len(findings) < max_effects and (not failing or stuck):
         stepped = _step_beside(context, current)
         if stepped is not None:
             findings.append(stepped[0])
-            current, checks, undecided, closing = stepped[0].fit, stepped[1], (), ()
-    return current, checks, findings, undecided, closing
+            current, checks, undecided = stepped[0].fit, stepped[1], None
+    return current, checks, findings, undecided
 
 
 def _named_against(context: Context, fit: ModelFit, located: ModelFit) -> bool:
@@ -507,10 +531,10 @@ def _named_against(context: Context, fit: ModelFit, located: ModelFit) -> bool:
     return explained and _elpd_difference(both, located)[0] > 0
 
 
-def _closing(context: Context, fit: ModelFit, log_bayes_factor: float) -> tuple:
-    """The term ``fit`` adds, as a one-item tuple, where the search stopped on it as the best
-    candidate but not decisive: when its evidence still favours it (a positive log Bayes
-    factor) and every check passes with it; empty otherwise. The findings are then judged
+def _closing(context: Context, fit: ModelFit, log_bayes_factor: float) -> Effect | None:
+    """The term ``fit`` adds, where the search stopped on it as the best candidate but not
+    decisive: when its evidence still favours it (a positive log Bayes factor) and every
+    check passes with it; None otherwise. The findings are then judged
     beside it (:func:`search_effects`): what they leave failing is the term that did not
     reach decisive evidence, reported undecided, not a mismatch they absorbed part of.
 
@@ -520,10 +544,10 @@ def _closing(context: Context, fit: ModelFit, log_bayes_factor: float) -> tuple:
     Allan deviation failing at 20-41 s, where the walk rises, and was withdrawn though it
     was decisive by some 3000 (nothing named); with the walk every check passes."""
     if not log_bayes_factor > 0:
-        return ()
+        return None
     if _failing(run_checks(fit, context.data)):
-        return ()
-    return (fit.spec.effects[-1],)
+        return None
+    return fit.spec.effects[-1]
 
 
 def _revisited(
@@ -549,24 +573,23 @@ def _revisited(
     (:func:`_beside_time_constant`) to take flicker's power at high frequency, and the search
     ended on Gauss-Markov and the walk, 3.3 and 7.1 below flicker and the walk. On seed 0 as
     redrawn the Gauss-Markov term led the walk by 1.3, and flicker (log BF 7.2) came beside
-    it where the walk belonged."""
+    it where the walk belonged.
+
+    The findings accepted after the one replaced were judged beside it: each is judged again
+    in the new model (:func:`_judged_in`), so that its numbers are those of the model that
+    holds it (on seed 14 as first drawn the walk's runner-up was flicker, and its log Bayes
+    factor was taken beside the Gauss-Markov term). The model holds one Gauss-Markov term at
+    most, so a call replaces one finding at most."""
     for index, finding in enumerate(findings[:-1]):
         runner_up = finding.runner_up
         if not isinstance(finding.effect, GaussMarkov) or not runner_up:
             continue
         if finding.log_bayes_factor - runner_up[1] > DECISIVE_LOG_BAYES_FACTOR:
             continue
-        rest = context.fit(
-            ModelSpec(tuple(e for e in current.spec.effects if e is not finding.effect))
-        )
-        alternatives = [
-            proposal
-            for name, proposal in candidate_fits(context, rest).items()
-            if name != finding.name
-        ]
+        rest, alternatives = _others_beside_rest(context, current, finding)
         if not alternatives:
             continue
-        fit, search = max(alternatives, key=lambda proposal: proposal[0].schwarz)
+        _, (fit, search) = max(alternatives.items(), key=lambda item: item[1][0].schwarz)
         log_bayes_factor = float(fit.schwarz - rest.schwarz)
         if not (fit.schwarz > current.schwarz and log_bayes_factor > DECISIVE_LOG_BAYES_FACTOR):
             continue
@@ -576,7 +599,45 @@ def _revisited(
         replaced = (finding.name, float(current.schwarz - rest.schwarz))
         findings[index] = Finding(effect, fit, log_bayes_factor, gain, gain_se, replaced, search)
         current = fit
+        findings[index + 1 :] = [
+            _judged_in(context, later, current) for later in findings[index + 1 :]
+        ]
     return findings, current
+
+
+def _others_beside_rest(
+    context: Context, current: ModelFit, finding: Finding
+) -> tuple[ModelFit, dict[str, tuple[ModelFit, dict]]]:
+    """``current`` without ``finding``'s term (the rest), and every other catalogue effect
+    fitted beside the rest (:func:`candidate_fits`, less ``finding``'s own)."""
+    rest = context.fit(ModelSpec(tuple(e for e in current.spec.effects if e is not finding.effect)))
+    candidates = candidate_fits(context, rest)
+    return rest, {name: proposal for name, proposal in candidates.items() if name != finding.name}
+
+
+def _judged_in(context: Context, finding: Finding, current: ModelFit) -> Finding:
+    """``finding`` judged in ``current``, a model that holds its term, as :func:`_revisited`
+    judges the term it puts in place of another: its log Bayes factor and ELPD gain against
+    ``current`` without it (the rest), and its runner-up the best other candidate beside the
+    rest (none where there is none). These fits only report: the time constants they
+    locate are not kept for the search's later rounds, whose search of a term starts where
+    its last one ended (:func:`~bayescal.inference._discovery_fit.search_time`)."""
+    held = dict(context.time_constants)
+    rest, others = _others_beside_rest(context, current, finding)
+    context.time_constants = held
+    gain, gain_se = _elpd_difference(current, rest)
+    runner_up = ()
+    if others:
+        name, (best, _) = max(others.items(), key=lambda item: item[1][0].schwarz)
+        runner_up = (name, float(best.schwarz - rest.schwarz))
+    return dataclasses.replace(
+        finding,
+        fit=current,
+        log_bayes_factor=float(current.schwarz - rest.schwarz),
+        delta_elpd=gain,
+        delta_elpd_se=gain_se,
+        runner_up=runner_up,
+    )
 
 
 def _failing(checks: list[dict]) -> set[str]:

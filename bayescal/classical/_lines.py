@@ -1138,10 +1138,15 @@ def find_lines(
         return dataclasses.replace(
             empty, note=f"a record shorter than {MIN_SAMPLES} samples is not searched for lines"
         )
-    increments = np.diff(values[start:stop])
-    increments = increments[: fast_length_at_most(increments.size)]
-    shared = transform.transform if transform is not None and transform.of(start, stop) else None
-    spectrum = _Spectrum(increments, start, float(rate_hz), level, shared)
+    shared = transform is not None and transform.of(start, stop)
+    if shared:
+        increments = transform.increments
+    else:
+        increments = np.diff(values[start:stop])
+        increments = increments[: fast_length_at_most(increments.size)]
+    spectrum = _Spectrum(
+        increments, start, float(rate_hz), level, transform.transform if shared else None
+    )
     try:
         return _described(spectrum, *_search(spectrum, max_lines), level)
     finally:

@@ -70,12 +70,12 @@ class RecordTransform:
 
     start: int
     stop: int
+    increments: np.ndarray
+    """The increments transformed (read-only)."""
     mean: float
-    """The increments' taper-weighted mean."""
+    """Their taper-weighted mean."""
     transform: np.ndarray
     """The real DFT of the tapered increments less their mean (read-only)."""
-    length: int
-    """The increments transformed."""
 
     def of(self, start: int, stop: int) -> bool:
         """Whether it is the transform of samples [start, stop)."""
@@ -103,8 +103,9 @@ def longest_run_transform(values) -> RecordTransform | None:
     start, stop = run
     increments = np.diff(np.asarray(values[start:stop], dtype=float))
     increments = increments[: fast_length_at_most(increments.size)]
+    increments.flags.writeable = False
     mean, transform = tapered_transform(increments, tukey_window(increments.size, TAPER_FRACTION))
-    return RecordTransform(start, stop, mean, transform, increments.size)
+    return RecordTransform(start, stop, increments, mean, transform)
 
 
 def tapered_transform(increments: np.ndarray, taper: np.ndarray) -> tuple[float, np.ndarray]:
@@ -119,8 +120,12 @@ def tapered_transform(increments: np.ndarray, taper: np.ndarray) -> tuple[float,
 
 def transform_power(transform: np.ndarray, taper: np.ndarray) -> np.ndarray:
     """I_j at j = 0 .. M // 2 from the tapered transform of M increments under ``taper``
-    (:func:`tapered_transform`): its squared modulus / sum h^2."""
-    return (transform.real**2 + transform.imag**2) / np.sum(taper**2)
+    (:func:`tapered_transform`): its squared modulus / sum h^2, in place in one array (the
+    same operations in the same order as squaring, adding and dividing each whole)."""
+    power = transform.real**2
+    power += transform.imag**2
+    power /= np.sum(taper**2)
+    return power
 
 
 def increment_periodogram(increments: np.ndarray, taper: np.ndarray) -> np.ndarray:

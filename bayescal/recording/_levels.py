@@ -83,7 +83,7 @@ def _distinct_levels(values) -> tuple[np.ndarray | None, int]:
     they are too many for a grid (:func:`discrete_step`): for an array, more than a quarter
     of the samples; for a spooled series gathered block by block, beyond MAX_GRID_LEVELS."""
     if not is_spooled(values):
-        finite = values[np.isfinite(values)]
+        finite = values if np.isfinite(values).all() else values[np.isfinite(values)]
         # The first quarter of the samples and one more, when all distinct, hold more
         # distinct values than a grid allows; so then does the whole record, whose sort (a
         # tenth of a second at 2^23 samples) an unquantized record need not pay.

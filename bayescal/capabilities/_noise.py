@@ -35,6 +35,7 @@ from ..models._terms import (
     parse_terms,
     without_found,
 )
+from ..models._whittle import MAX_SEGMENT
 from ..models.effects.spectral_lines import SpectralLines
 from ..recording._inputs import channel_input
 from ..recording._levels import discrete_step
@@ -319,6 +320,10 @@ def noise_setup(values, rate_hz: float, terms, unit: str, level_values=None, all
         if level_values is not None and np.shape(level_values) == np.shape(values):
             level_values = without_found(found, level_values)
         allan, transform = None, None
+    if transform is not None and transform.stop - transform.start > MAX_SEGMENT:
+        # The summaries take that run in pieces: nothing of it serves them (its increments
+        # and transform, 200 MB at 2^23 samples, are let go before they start).
+        transform = None
     with stage("summaries (binned periodogram, block means)"):
         spectral, level = noise_summaries(
             values, rate_hz, family, level_values, excluded_bands(found), transform

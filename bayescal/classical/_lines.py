@@ -428,10 +428,10 @@ def _ordinate_correlation(length: int) -> float:
     return float(abs(np.dot(squares, shift)) ** 2 / np.sum(squares) ** 2)
 
 
-@functools.lru_cache(maxsize=2)
+@functools.lru_cache(maxsize=1)
 def _squared_taper(length: int) -> np.ndarray:
     """The squared taper of ``length`` increments (the least squares' weight), read-only,
-    kept as the taper is (:func:`~._periodogram.tukey_window`)."""
+    kept for the last length met (a notebook fits one record again and again)."""
     squares = tukey_window(length, TAPER_FRACTION) ** 2
     squares.flags.writeable = False
     return squares

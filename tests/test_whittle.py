@@ -212,15 +212,18 @@ def test_expected_periodogram_kept_on_disk_is_the_computed_one(tmp_path, monkeyp
 
 def test_a_noise_fit_transforms_its_record_once_to_the_same_bits(monkeypatch):
     """The line scan's periodogram and the Whittle summaries read one transform of the
-    record's increments (:func:`one_transform_per_record`): inside the block the whole
-    record is transformed once, and the summaries are those computed alone to the bit."""
+    record's increments, taken once by the fit's setup and handed to both
+    (:func:`longest_run_transform`): the whole record is transformed once, and the lines
+    and the summaries are those computed alone to the bit."""
     from bayescal.capabilities._noise import noise_setup
     from bayescal.classical import _periodogram
+    from bayescal.classical._lines import find_lines
     from bayescal.models._noise_problem import noise_summaries
     from bayescal.models._terms import AUTO, CANDIDATE_TERMS
 
     values = bc.NoiseModel(rate_hz=RATE, bias=0.3, N=0.005, K=5e-6).simulate(2**15, seed=1)
     alone, _ = noise_summaries(values, RATE, ("white", *CANDIDATE_TERMS))
+    lines = find_lines(values, RATE)
     lengths = []
 
     def counted(data, *arguments, **keywords):
@@ -232,5 +235,6 @@ def test_a_noise_fit_transforms_its_record_once_to_the_same_bits(monkeypatch):
     setup = noise_setup(values, RATE, AUTO, "deg/s")  # the terms' family, lines searched
     assert not any(finding.found for finding in setup.found.values())
     assert lengths.count(max(lengths)) == 1, lengths  # the record's increments, once
+    assert setup.found["spectral_lines"].largest == lines.largest
     for kept, computed in zip(jax.tree.leaves(setup.spectral), jax.tree.leaves(alone), strict=True):
         assert np.array_equal(kept, computed)

@@ -12,7 +12,7 @@ from .._caches import release_compiled_code
 from .._errors import InputError
 from .._stages import stage
 from ..classical._noise import ClassicalNoise, classical_noise
-from ..classical._periodogram import one_transform_per_record
+from ..classical._periodogram import longest_run_transform
 from ..inference._checks import FitCheck, noise_model_checker
 from ..inference._lines_posterior import SpectralLinesFit, lines_posterior
 from ..inference._noise_posterior import NoisePosterior, sample_noise
@@ -307,20 +307,27 @@ def noise_setup(values, rate_hz: float, terms, unit: str, level_values=None, all
     family = ("white", *CANDIDATE_TERMS) if terms == AUTO else terms
     # Terms found in the record (spectral lines) are taken out before the noise is fitted:
     # the noise model, its checks and N are of what they leave.
-    # The line scan's periodogram of the record and the summaries' are one transform where
-    # no line is taken out and the summaries take the record in one piece: computed once.
-    with one_transform_per_record(MAX_SEGMENT):
-        with stage("spectral lines (periodogram scan)"):
-            found = find_in_record(family, values, rate_hz)
-        if any(finding.found for finding in found.values()):
-            values = without_found(found, values)
-            if level_values is not None and np.shape(level_values) == np.shape(values):
-                level_values = without_found(found, level_values)
-            allan = None
-        with stage("summaries (binned periodogram, block means)"):
-            spectral, level = noise_summaries(
-                values, rate_hz, family, level_values, exclude=excluded_bands(found)
-            )
+    # The line scan's periodogram of the record and the summaries' are one transform (of its
+    # longest gap-free run) where no line is taken out and the summaries take that run in one
+    # piece: taken once here and handed to both.
+    transform = None
+    with stage("spectral lines (periodogram scan)"):
+        if SpectralLines.name in family:
+            transform = longest_run_transform(values)
+        found = find_in_record(family, values, rate_hz, transform)
+    if any(finding.found for finding in found.values()):
+        values = without_found(found, values)
+        if level_values is not None and np.shape(level_values) == np.shape(values):
+            level_values = without_found(found, level_values)
+        allan, transform = None, None
+    if transform is not None and transform.stop - transform.start > MAX_SEGMENT:
+        # The summaries take that run in pieces: nothing of it serves them (its increments
+        # and transform, 200 MB at 2^23 samples, are let go before they start).
+        transform = None
+    with stage("summaries (binned periodogram, block means)"):
+        spectral, level = noise_summaries(
+            values, rate_hz, family, level_values, excluded_bands(found), transform
+        )
     checker = _with_what_is_left(noise_model_checker(spectral, values, unit, allan), found)
     return NoiseSetup(lsb, found, spectral, level, checker)
 

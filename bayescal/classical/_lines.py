@@ -52,11 +52,14 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import special, stats
 
-from ..recording._series import gap_free_runs, is_spooled
+from ..recording._series import is_spooled
 from ._periodogram import (
     TAPER_FRACTION,
+    RecordTransform,
     fast_length_at_most,
     increment_periodogram,
+    longest_run,
+    transform_power,
     tukey_window,
 )
 
@@ -309,20 +312,25 @@ class _Floors:
 
     def __init__(self, power: np.ndarray, usable: np.ndarray):
         self.size = power.size
-        weight = usable.astype(float)
-        self.sums = self._padded(np.cumsum(power * weight))
-        self.counts = self._padded(np.cumsum(weight))
+        # Each cumulative sum is taken into its padded array (two arrays of the record's
+        # length at 2^23 samples, not six).
+        self.sums = self._padded(
+            lambda out: np.cumsum(np.multiply(power, usable, out=out), out=out)
+        )
+        self.counts = self._padded(lambda out: np.cumsum(usable, dtype=float, out=out))
         # A window's sum is a difference of cumulative sums, each rounded to a part in 10^16
         # of the whole record's: a floor below that (a digital filter's stop band with no
         # noise after it, 13 decades down) reads as zero or less, and every ordinate above
         # it was a line of infinite ratio. Such a floor is not resolved: it counts nothing.
         self.resolution = 64 * np.finfo(float).eps * self.sums[-1]
 
-    def _padded(self, cumulative: np.ndarray) -> np.ndarray:
-        padded = np.empty(cumulative.size + 1 + 2 * self.PAD)
+    def _padded(self, cumulate) -> np.ndarray:
+        """The cumulative sum ``cumulate(out)`` writes into ``out`` (the record's length),
+        padded (the class docstring)."""
+        padded = np.empty(self.size + 1 + 2 * self.PAD)
         padded[: self.PAD + 1] = 0.0
-        padded[self.PAD + 1 : self.PAD + 1 + cumulative.size] = cumulative
-        padded[self.PAD + 1 + cumulative.size :] = cumulative[-1] if cumulative.size else 0.0
+        cumulate(padded[self.PAD + 1 : self.PAD + 1 + self.size])
+        padded[self.PAD + 1 + self.size :] = padded[self.PAD + self.size] if self.size else 0.0
         return padded
 
     @staticmethod
@@ -357,17 +365,17 @@ class _Floors:
         )
         return self._mean((lo_left, hi_left), (lo_right, hi_right))
 
-    def lower_bounds(self, first: int, stop: int, width: int) -> np.ndarray:
-        """A lower bound of the floor of each window of ``width`` ordinates starting at
-        first .. stop - 1 (as :meth:`at` reads it, its guard GUARD beyond its edges), to
-        screen the millions of windows of a long record (:func:`_scan`): below
-        :data:`FULL_REACH` (a few thousand windows) and for the last few, the floor itself
-        (infinite where too few ordinates make one); beyond, per block of
-        :data:`SCREEN_BLOCK` windows of the floor's full half-width h, the sum over the
-        ordinates every window of the block averages (h - B + 1 each side) over the most
-        ordinates any of them averages (those, and B - 1 more each side). The periodogram is
-        not negative, so no window's floor is below its block's bound; a block whose floors
-        are not resolved is infinite."""
+    def lower_bounds(self, first: int, stop: int, width: int) -> tuple[np.ndarray, ...]:
+        """Lower bounds of the floors of the windows of ``width`` ordinates starting at
+        first .. stop - 1 (as :meth:`at` reads them, their guard GUARD beyond their edges),
+        to screen the millions of windows of a long record (:func:`_scan`): (first windows,
+        blocks, last windows). Below :data:`FULL_REACH` (a few thousand windows) and for the
+        last few, each window's floor itself (infinite where too few ordinates make one);
+        between, one bound per block of :data:`SCREEN_BLOCK` windows of the floor's full
+        half-width h: the sum over the ordinates every window of the block averages (h - B +
+        1 each side) over the most ordinates any of them averages (those, and B - 1 more each
+        side). The periodogram is not negative, so no window's floor is below its block's
+        bound; a block whose floors are not resolved is infinite."""
         guard = GUARD + (width - 1) / 2
         head_stop = max(first, min(stop, FULL_REACH))
         blocks = max(0, (stop - head_stop) // SCREEN_BLOCK)
@@ -376,11 +384,18 @@ class _Floors:
         floors, counts = self.at(exact + (width - 1) / 2, np.full(exact.size, guard))
         floors = np.where(counts >= MIN_FLOOR_ORDINATES, floors, np.inf)
         reach, extra = FLOOR_ORDINATES[1], SCREEN_BLOCK - 1
-        start = head_stop + self.PAD + SCREEN_BLOCK * np.arange(blocks)
-        left = (start + extra - GUARD - reach, start - GUARD)
-        right = (start + extra + width + GUARD, start + width + GUARD + reach)
-        every = (start - GUARD - reach, start + extra - GUARD)
-        every_right = (start + width + GUARD, start + extra + width + GUARD + reach)
+        first_block = head_stop + self.PAD
+
+        def at(offset: int) -> slice:
+            """The padded sums' index ``offset`` past each block's first window (strided:
+            no index array to gather by)."""
+            begin = first_block + offset
+            return slice(begin, begin + SCREEN_BLOCK * blocks, SCREEN_BLOCK)
+
+        left = (at(extra - GUARD - reach), at(-GUARD))
+        right = (at(extra + width + GUARD), at(width + GUARD + reach))
+        every = (at(-GUARD - reach), at(extra - GUARD))
+        every_right = (at(width + GUARD), at(extra + width + GUARD + reach))
         # The sums' rounding (a few eps of the record's power) is far below their resolution
         # (:meth:`__init__`): taken off the shared sum, it leaves the bound a bound; a block
         # whose windows all read below half of it tests nothing (floors not resolved).
@@ -388,13 +403,8 @@ class _Floors:
         count = self._read(self.counts, left, right)
         resolved = self._read(self.sums, every, every_right) > 0.5 * self.resolution
         block = np.where(resolved, np.maximum(shared, 0.0) / (count + 2 * extra), np.inf)
-        return np.concatenate(
-            (
-                floors[: head_stop - first],
-                np.repeat(block, SCREEN_BLOCK),
-                floors[head_stop - first :],
-            )
-        )
+        head = head_stop - first
+        return floors[:head], block, floors[head:]
 
 
 FULL_REACH = math.ceil(FLOOR_ORDINATES[1] / FLOOR_FRACTION)
@@ -416,6 +426,15 @@ def _ordinate_correlation(length: int) -> float:
     squares = taper**2
     shift = np.exp(-2j * np.pi * np.arange(length) / length)
     return float(abs(np.dot(squares, shift)) ** 2 / np.sum(squares) ** 2)
+
+
+@functools.lru_cache(maxsize=1)
+def _squared_taper(length: int) -> np.ndarray:
+    """The squared taper of ``length`` increments (the least squares' weight), read-only,
+    kept for the last length met (a notebook fits one record again and again)."""
+    squares = tukey_window(length, TAPER_FRACTION) ** 2
+    squares.flags.writeable = False
+    return squares
 
 
 def _scale_dof(width: int, rho2: float) -> float:
@@ -447,9 +466,10 @@ def _scan(power, usable, lowest, highest, line_index, rho2, alpha):
         stop = highest - width + 2
         if stop <= lowest:
             continue
-        sums = np.convolve(power, np.ones(width), mode="valid")[lowest:stop]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ceiling = sums / (width * floors.lower_bounds(lowest, stop, width))
+        # A window of one ordinate sums it alone: no pass of np.convolve over the record.
+        whole = power if width == 1 else np.convolve(power, np.ones(width), mode="valid")
+        sums = whole[lowest:stop]
+        ceiling = _ceilings(sums, width, *floors.lower_bounds(lowest, stop, width))
         dof = _scale_dof(width, rho2)
         # Significance's quantile a little low: its 1 - alpha rounds, and a window read in
         # excess costs a floor, one left unread a line.
@@ -475,6 +495,24 @@ def _scan(power, usable, lowest, highest, line_index, rho2, alpha):
                 log_p = np.concatenate((log_p, more_log_p))[order]
         results.append((width, lowest + read, ratio, log_p, log_p < log_alpha))
     return results
+
+
+def _ceilings(sums, width: int, head, blocks, tail) -> np.ndarray:
+    """Each window's sum over ``width`` times its floor's lower bound
+    (:meth:`_Floors.lower_bounds`: the first windows', one per block of the middle ones,
+    the last windows'), the block's bound broadcast over its windows (not repeated)."""
+    ceiling = np.empty(sums.size)
+    middle = slice(head.size, head.size + blocks.size * SCREEN_BLOCK)
+    shape = (blocks.size, SCREEN_BLOCK)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        np.divide(sums[: head.size], width * head, out=ceiling[: head.size])
+        np.divide(
+            sums[middle].reshape(shape),
+            (width * blocks)[:, None],
+            out=ceiling[middle].reshape(shape),
+        )
+        np.divide(sums[middle.stop :], width * tail, out=ceiling[middle.stop :])
+    return ceiling
 
 
 def _exact(floors, sums, read, lowest, width, line_index, dof):
@@ -712,22 +750,36 @@ def _transforms(columns: np.ndarray, nu: np.ndarray) -> np.ndarray:
 
 def _usable(size: int, highest: int, positions) -> np.ndarray:
     """Which ordinates (0 .. size - 1) may stand in a floor: 1 .. highest, away from the
-    lines at ``positions`` (ordinates) by more than :data:`GUARD`."""
-    index = np.arange(size)
-    usable = (index >= 1) & (index <= highest)
+    lines at ``positions`` (ordinates) by more than :data:`GUARD`. Each line's test is
+    made on the ordinates beside it only (those farther are away from it): four million
+    ordinates at 2^23 samples, a pass over them each."""
+    usable = np.zeros(size, dtype=bool)
+    usable[1 : max(highest + 1, 0)] = True
     for position in positions:
-        usable &= np.abs(index - position) > GUARD
+        lo, hi = 0, size
+        if math.isfinite(position):
+            lo = min(max(math.floor(position) - GUARD - 1, 0), size)
+            hi = max(min(math.ceil(position) + GUARD + 2, size), lo)
+        usable[lo:hi] &= np.abs(np.arange(lo, hi) - position) > GUARD
     return usable
 
 
 class _Spectrum:
     """The record's increments, their taper, and what the test reads of them."""
 
-    def __init__(self, increments: np.ndarray, offset: int, rate_hz: float, level: float):
+    def __init__(
+        self,
+        increments: np.ndarray,
+        offset: int,
+        rate_hz: float,
+        level: float,
+        transform: np.ndarray | None = None,
+    ):
         self.increments, self.offset, self.rate_hz = increments, offset, rate_hz
+        self._transform = transform  # the increments' tapered transform, where handed in
         self.size = increments.size
         self.taper = tukey_window(self.size, TAPER_FRACTION)
-        self.weight = self.taper**2
+        self.weight = _squared_taper(self.size)
         self.lowest, self.highest = LOWEST_CYCLES, (self.size - 1) // 2
         self.searched = max(self.highest - self.lowest + 1, 1)
         self.tests = self.searched * len(SCALES)
@@ -738,11 +790,16 @@ class _Spectrum:
     def periodogram(self, fitted: np.ndarray) -> np.ndarray:
         """The periodogram of the increments less ``fitted``. With nothing fitted it is the
         record's own, kept: the search's first round and the description of a record without
-        lines both read it (an FFT of the whole record each)."""
+        lines both read it (an FFT of the whole record each), from the transform handed in
+        where there is one."""
         if fitted.any():
             return increment_periodogram(self.increments - fitted, self.taper)
         if self._unfitted is None:
-            self._unfitted = increment_periodogram(self.increments, self.taper)
+            self._unfitted = (
+                increment_periodogram(self.increments, self.taper)
+                if self._transform is None
+                else transform_power(self._transform, self.taper)
+            )
         return self._unfitted
 
     def scan(self, power: np.ndarray, positions) -> list:
@@ -1035,7 +1092,12 @@ def _described(spectrum: _Spectrum, nu: np.ndarray, bands, level: float) -> Line
 
 
 def find_lines(
-    values, rate_hz: float, *, level: float = LINE_LEVEL, max_lines: int = MAX_LINES
+    values,
+    rate_hz: float,
+    *,
+    level: float = LINE_LEVEL,
+    max_lines: int = MAX_LINES,
+    transform: RecordTransform | None = None,
 ) -> LineSearch:
     """The spectral lines of a record (module docstring).
 
@@ -1050,6 +1112,10 @@ def find_lines(
         The probability that a record without lines shows one.
     max_lines : int
         The most lines looked for.
+    transform : RecordTransform, optional
+        The tapered transform of the record's longest run without a gap
+        (:func:`~bayescal.classical._periodogram.longest_run_transform` of ``values``), where
+        the caller has it: the record's periodogram is read from it, not computed again.
 
     Returns
     -------
@@ -1070,17 +1136,23 @@ def find_lines(
     if is_spooled(values):
         return dataclasses.replace(empty, note="a spooled record is not searched for lines")
     values = np.asarray(values, dtype=float)
-    runs = gap_free_runs(values).tolist()
-    if not runs:
+    run = longest_run(values)
+    if run is None:
         return dataclasses.replace(empty, note="no samples")
-    start, stop = max(runs, key=lambda run: run[1] - run[0])
+    start, stop = run
     if stop - start - 1 < MIN_SAMPLES:
         return dataclasses.replace(
             empty, note=f"a record shorter than {MIN_SAMPLES} samples is not searched for lines"
         )
-    increments = np.diff(values[start:stop])
-    increments = increments[: fast_length_at_most(increments.size)]
-    spectrum = _Spectrum(increments, start, float(rate_hz), level)
+    shared = transform is not None and transform.of(start, stop)
+    if shared:
+        increments = transform.increments
+    else:
+        increments = np.diff(values[start:stop])
+        increments = increments[: fast_length_at_most(increments.size)]
+    spectrum = _Spectrum(
+        increments, start, float(rate_hz), level, transform.transform if shared else None
+    )
     try:
         return _described(spectrum, *_search(spectrum, max_lines), level)
     finally:

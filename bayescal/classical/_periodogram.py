@@ -10,36 +10,44 @@ sum h^2 then has the spectrum of the increments as its mean, per cycle per sampl
 (white increments of variance s^2 read s^2).
 """
 
-import contextlib
-import contextvars
 import functools
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import fft
+
+from ..recording._series import gap_free_runs, is_spooled
 
 TAPER_FRACTION = 0.1
 """The share of the record the Tukey taper's two cosine ends span."""
 
 
+@functools.lru_cache(maxsize=4)
 def tukey_window(length: int, fraction: float) -> np.ndarray:
     """The symmetric Tukey (tapered cosine) window of ``length`` points whose tapers span
     ``fraction`` (0 < fraction < 1) of it, as ``scipy.signal.windows.tukey`` computes it
-    (importing ``scipy.signal`` costs a run 1.7 s)."""
+    (importing ``scipy.signal`` costs a run 1.7 s). Read-only, kept for the last lengths met:
+    a notebook fits one record again and again, and its line scan, summaries and checks each
+    take the taper of its length (20 ms at 2^23 points)."""
     if length <= 1:
-        return np.ones(length)
-    n = np.arange(length, dtype=float)
-    width = math.floor(fraction * (length - 1) / 2.0)
-    rising = n[: width + 1]
-    falling = n[length - width - 1 :]
-    return np.concatenate(
-        (
-            0.5 * (1 + np.cos(np.pi * (-1 + 2.0 * rising / fraction / (length - 1)))),
-            np.ones(max(length - 2 * width - 2, 0)),
-            0.5
-            * (1 + np.cos(np.pi * (-2.0 / fraction + 1 + 2.0 * falling / fraction / (length - 1)))),
+        window = np.ones(length)
+    else:
+        n = np.arange(length, dtype=float)
+        width = math.floor(fraction * (length - 1) / 2.0)
+        rising = n[: width + 1]
+        falling = n[length - width - 1 :]
+        rising_phase = -1 + 2.0 * rising / fraction / (length - 1)
+        falling_phase = -2.0 / fraction + 1 + 2.0 * falling / fraction / (length - 1)
+        window = np.concatenate(
+            (
+                0.5 * (1 + np.cos(np.pi * rising_phase)),
+                np.ones(max(length - 2 * width - 2, 0)),
+                0.5 * (1 + np.cos(np.pi * falling_phase)),
+            )
         )
-    )
+    window.flags.writeable = False
+    return window
 
 
 @functools.lru_cache(maxsize=64)
@@ -53,51 +61,75 @@ def fast_length_at_most(length: int) -> int:
     return candidate
 
 
-_KEPT = contextvars.ContextVar("bayescal_kept_transform", default=None)
-"""Inside :func:`one_transform_per_record`: (a list holding at most one (increments, taper,
-mean, transform), the most increments kept)."""
+@dataclass(frozen=True)
+class RecordTransform:
+    """The tapered transform (:func:`tapered_transform`) of the increments of a record's
+    samples [start, stop), cut to a fast length (:func:`fast_length_at_most`): computed once
+    where a record is read two ways — a noise fit's line scan and its Whittle summaries, the
+    same numbers in the same order — and handed to each (:func:`longest_run_transform`)."""
+
+    start: int
+    stop: int
+    increments: np.ndarray
+    """The increments transformed (read-only)."""
+    mean: float
+    """Their taper-weighted mean."""
+    transform: np.ndarray
+    """The real DFT of the tapered increments less their mean (read-only)."""
+
+    def of(self, start: int, stop: int) -> bool:
+        """Whether it is the transform of samples [start, stop)."""
+        return (start, stop) == (self.start, self.stop)
 
 
-@contextlib.contextmanager
-def one_transform_per_record(most: int):
-    """Within the block, the first :func:`tapered_transform` of at most ``most`` increments
-    is kept, and a later one of the same increments under the same taper is that one, not
-    computed again: a noise fit's line scan and its Whittle summaries both transform the whole
-    record's increments where the summaries take it in one piece (``most``: the longest piece
-    they take; a longer record's pieces are other transforms, and nothing is kept for them),
-    the same numbers in the same order, so the same bits. Kept only within the block (a copy
-    of the increments and the transform: 24 MB at 2^20 samples)."""
-    token = _KEPT.set(([], most))
-    try:
-        yield
-    finally:
-        _KEPT.reset(token)
+def longest_run(values) -> tuple[int, int] | None:
+    """[start, stop) of the record's longest run without a gap (the first of equal ones),
+    or None where it has no sample."""
+    runs = gap_free_runs(values).tolist()
+    if not runs:
+        return None
+    start, stop = max(runs, key=lambda run: run[1] - run[0])
+    return start, stop
+
+
+def longest_run_transform(values) -> RecordTransform | None:
+    """The :class:`RecordTransform` of the record's longest run without a gap (what the line
+    scan reads, and the summaries where they take it in one piece), under the Tukey taper of
+    :data:`TAPER_FRACTION`; None for a spooled record (nothing reads it whole) or a run of
+    fewer than two increments."""
+    run = None if is_spooled(values) else longest_run(values)
+    if run is None or run[1] - run[0] < 3:
+        return None
+    start, stop = run
+    increments = np.diff(np.asarray(values[start:stop], dtype=float))
+    increments = increments[: fast_length_at_most(increments.size)]
+    increments.flags.writeable = False
+    mean, transform = tapered_transform(increments, tukey_window(increments.size, TAPER_FRACTION))
+    return RecordTransform(start, stop, increments, mean, transform)
 
 
 def tapered_transform(increments: np.ndarray, taper: np.ndarray) -> tuple[float, np.ndarray]:
     """The taper-weighted mean of ``increments`` and the real DFT of ``taper * (increments -
     mean)`` (read-only): the transform whose squared modulus is the periodogram (module
-    docstring). Inside :func:`one_transform_per_record`, those of the first increments and
-    taper are kept."""
-    kept, most = _KEPT.get() or (None, 0)
-    if kept:
-        ((data, window, mean, transform),) = kept
-        if (
-            data.shape == increments.shape
-            and (window is taper or np.array_equal(window, taper))
-            and np.array_equal(data, increments)
-        ):
-            return mean, transform
+    docstring)."""
     mean = float(np.dot(taper, increments) / taper.sum())
     transform = fft.rfft(taper * (increments - mean))
     transform.flags.writeable = False
-    if kept == [] and increments.size <= most:
-        kept.append((increments.copy(), taper, mean, transform))
     return mean, transform
+
+
+def transform_power(transform: np.ndarray, taper: np.ndarray) -> np.ndarray:
+    """I_j at j = 0 .. M // 2 from the tapered transform of M increments under ``taper``
+    (:func:`tapered_transform`): its squared modulus / sum h^2, in place in one array (the
+    same operations in the same order as squaring, adding and dividing each whole)."""
+    power = transform.real**2
+    power += transform.imag**2
+    power /= np.sum(taper**2)
+    return power
 
 
 def increment_periodogram(increments: np.ndarray, taper: np.ndarray) -> np.ndarray:
     """I_j at j = 0 .. M // 2 of ``increments`` (M of them) under ``taper``: |DFT of the
     tapered increments less their taper-weighted mean|^2 / sum h^2 (module docstring)."""
     _, transform = tapered_transform(increments, taper)
-    return (transform.real**2 + transform.imag**2) / np.sum(taper**2)
+    return transform_power(transform, taper)

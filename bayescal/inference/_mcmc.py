@@ -145,7 +145,9 @@ class _BatchLogDensity:
     def de_step(self, halves, log_probs, pairs, gamma, log_u):
         """:func:`de_halves` of these arrays (numpy in, numpy out) in one compiled call."""
         arrays = (halves, log_probs, pairs, gamma, log_u)
-        return jax.tree.map(np.asarray, self._function(_de_step, arrays)(*arrays))
+        # One transfer of the four results, not one each: a step's Python is the sampler's
+        # cost beside a likelihood of a few hundred bins.
+        return jax.device_get(self._function(_de_step, arrays)(*arrays))
 
 
 def batch_log_density(log_density, model, grouped: bool = False):

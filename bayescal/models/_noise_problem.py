@@ -57,13 +57,16 @@ def record_components(terms, rate_hz: float, n_samples: int) -> Components:
     return Components.of(terms, Context(rate_hz, n_samples / rate_hz))
 
 
-def noise_summaries(values, rate_hz: float, terms, level_values=None, exclude=()):
+def noise_summaries(values, rate_hz: float, terms, level_values=None, exclude=(), transform=None):
     """(spectral, level) summaries of a record (NaN marks a gap) holding the components of
     ``terms``: what every :class:`NoiseProblem` of those terms shares. ``level_values``: the
     samples whose level the bias is (``values`` by default); ``exclude``: bands (low, high),
-    Hz, the likelihood leaves out (a broadened spectral line's)."""
+    Hz, the likelihood leaves out (a broadened spectral line's); ``transform``: a tapered
+    transform of ``values`` already taken (:func:`~bayescal.models._whittle.spectral_summary`)."""
     components = record_components(terms, rate_hz, len(values))
-    spectral = spectral_summary(values, rate_hz, components=components, exclude=exclude)
+    spectral = spectral_summary(
+        values, rate_hz, components=components, exclude=exclude, transform=transform
+    )
     level = level_summary(values if level_values is None else level_values, rate_hz, components)
     return spectral, level
 

@@ -263,13 +263,15 @@ def reference_scales(allan) -> dict[str, float]:
     return {k: v for term in NOISE_TERMS for k, v in term.reference_scales(allan).items()}
 
 
-def find_in_record(terms, values, rate_hz: float) -> dict:
+def find_in_record(terms, values, rate_hz: float, transform=None) -> dict:
     """What each term of ``terms`` found in the record before the fit (the terms
     :attr:`~bayescal.models.effects._base.NoiseTerm.found_in_record`: spectral lines), by
     name: each an object with ``found``, ``removed``, ``excluded_bands_hz``, ``verdict`` and
-    ``log_bayes_factor``."""
+    ``log_bayes_factor``. ``transform``: the tapered transform of the record's longest run
+    without a gap, where already taken
+    (:func:`~bayescal.classical._periodogram.longest_run_transform`)."""
     return {
-        term.name: term.find(values, rate_hz)
+        term.name: term.find(values, rate_hz, transform=transform)
         for term in NOISE_TERMS
         if term.found_in_record and term.name in terms
     }

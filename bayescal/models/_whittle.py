@@ -78,6 +78,7 @@ from .._caches import kept_array
 from .._errors import InputError
 from ..classical._periodogram import (
     TAPER_FRACTION,
+    RecordTransform,
     fast_length_at_most,
     tapered_transform,
     tukey_window,
@@ -362,6 +363,7 @@ def spectral_summary(
     regressors=None,
     extra_components=(),
     exclude=(),
+    transform: RecordTransform | None = None,
 ) -> SpectralSummary:
     """Summarise a rate series (NaN marks missing samples) for the Whittle likelihood.
 
@@ -371,7 +373,10 @@ def spectral_summary(
     (:func:`whittle_log_likelihood`, ``beta``); ``extra_components``: functions of the lag
     giving the increment autocovariance of further stationary terms, appended to the basis in
     that order; ``exclude``: bands (low, high), Hz, whose Fourier frequencies the likelihood
-    leaves out (a broadened spectral line's), a bin left empty dropped."""
+    leaves out (a broadened spectral line's), a bin left empty dropped; ``transform``: the
+    tapered transform of a stretch of ``values`` the caller has already taken
+    (:func:`~bayescal.classical._periodogram.longest_run_transform`, a noise fit's line
+    scan's), read where a segment is that stretch under the same taper, not computed again."""
     regressors = None if regressors is None else np.asarray(regressors, dtype=float)
     cross, gram, mean_regressor = [], [], []
     parts = {
@@ -382,13 +387,17 @@ def spectral_summary(
         raise InputError("regressors: a spooled (long) record is summarised without them")
     values = values if is_spooled(values) else np.asarray(values, dtype=float)
     exclude = tuple(tuple(float(edge) for edge in band) for band in exclude)
+    shared = transform if taper_fraction == TAPER_FRACTION else None
     for start, stop in _segment_bounds(values, MIN_INCREMENTS):
         increments = np.diff(read(values, start, stop))
         increments = increments[: fast_length_at_most(increments.size)]
         length = increments.size
         layout = _layout(length, float(rate_hz), taper_fraction, bin_width, exclude)
         taper, lows, keep = layout.taper, layout.lows, layout.keep
-        mean, transform = tapered_transform(increments, taper)
+        if shared is not None and shared.of(start, stop):
+            mean, transform = shared.mean, shared.transform
+        else:
+            mean, transform = tapered_transform(increments, taper)
         periodogram = np.abs(transform) ** 2 / layout.norm
         n_frequencies = layout.n_frequencies
         if regressors is not None:

@@ -237,14 +237,17 @@ class NoiseTerm(SlotTerm):
             cls.parameter = cls.parameters[0].name
 
     @classmethod
-    def find(cls, values, rate_hz: float):
+    def find(cls, values, rate_hz: float, transform=None):
         """What a term :attr:`found_in_record` finds in a record (NaN marks a missing
         sample), before any fit: an object with ``found`` (whether there is anything),
         ``removed(values)`` (the record without it), ``excluded_bands_hz`` (bands, Hz, the
         stochastic fit leaves out), ``left_in`` (what stays in the record less it, as a noise
         model's parameters, for the checks of the fit), ``verdict`` (what was found, in
         words, for the term search's table) and ``log_bayes_factor`` (its evidence against
-        the record without it). None for the other terms."""
+        the record without it). None for the other terms. ``transform``: the tapered
+        transform of the record's longest run without a gap, where already taken
+        (:func:`~bayescal.classical._periodogram.longest_run_transform`), for a term that
+        reads it."""
         return None
 
     @classmethod

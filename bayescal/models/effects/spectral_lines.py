@@ -44,9 +44,10 @@ class SpectralLines(NoiseTerm):
     streams: ClassVar[tuple[int, ...]] = (6,)
 
     @classmethod
-    def find(cls, values, rate_hz: float):
-        """The record's lines (:func:`~bayescal.classical._lines.find_lines`)."""
-        return find_lines(values, rate_hz)
+    def find(cls, values, rate_hz: float, transform=None):
+        """The record's lines (:func:`~bayescal.classical._lines.find_lines`; its periodogram
+        from ``transform`` where given)."""
+        return find_lines(values, rate_hz, transform=transform)
 
     @classmethod
     def allan_variance(cls, tau, values, rate_hz):

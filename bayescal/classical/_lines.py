@@ -54,6 +54,7 @@ from scipy import special, stats
 
 from ..recording._series import is_spooled
 from ._periodogram import (
+    KEPT_TAPER_LENGTH,
     TAPER_FRACTION,
     RecordTransform,
     fast_length_at_most,
@@ -428,13 +429,23 @@ def _ordinate_correlation(length: int) -> float:
     return float(abs(np.dot(squares, shift)) ** 2 / np.sum(squares) ** 2)
 
 
-@functools.lru_cache(maxsize=1)
 def _squared_taper(length: int) -> np.ndarray:
     """The squared taper of ``length`` increments (the least squares' weight), read-only,
-    kept for the last length met (a notebook fits one record again and again)."""
+    kept for the last length met up to :data:`KEPT_TAPER_LENGTH` (a notebook fits one record
+    again and again)."""
+    if length <= KEPT_TAPER_LENGTH:
+        return _kept_squared_taper(length)
+    return _made_squared_taper(length)
+
+
+def _made_squared_taper(length: int) -> np.ndarray:
+    """:func:`_squared_taper`, made."""
     squares = tukey_window(length, TAPER_FRACTION) ** 2
     squares.flags.writeable = False
     return squares
+
+
+_kept_squared_taper = functools.lru_cache(maxsize=1)(_made_squared_taper)
 
 
 def _scale_dof(width: int, rho2: float) -> float:

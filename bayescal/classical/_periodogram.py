@@ -23,13 +23,25 @@ TAPER_FRACTION = 0.1
 """The share of the record the Tukey taper's two cosine ends span."""
 
 
-@functools.lru_cache(maxsize=4)
+KEPT_TAPER_LENGTH = 2**21
+"""The longest taper kept between calls (16 MB): a notebook fits one record again and again,
+and its line scan, summaries and checks each take the taper of their length; a longer one
+(64 MB at 2^23 points, 800 MB at 10^8) is made each time (20 ms at 2^23) rather than held
+after the call."""
+
+
 def tukey_window(length: int, fraction: float) -> np.ndarray:
     """The symmetric Tukey (tapered cosine) window of ``length`` points whose tapers span
     ``fraction`` (0 < fraction < 1) of it, as ``scipy.signal.windows.tukey`` computes it
-    (importing ``scipy.signal`` costs a run 1.7 s). Read-only, kept for the last lengths met:
-    a notebook fits one record again and again, and its line scan, summaries and checks each
-    take the taper of its length (20 ms at 2^23 points)."""
+    (importing ``scipy.signal`` costs a run 1.7 s). Read-only; kept for the last lengths met
+    up to :data:`KEPT_TAPER_LENGTH`."""
+    if length <= KEPT_TAPER_LENGTH:
+        return _kept_tukey_window(length, fraction)
+    return _tukey_window(length, fraction)
+
+
+def _tukey_window(length: int, fraction: float) -> np.ndarray:
+    """:func:`tukey_window`, made."""
     if length <= 1:
         window = np.ones(length)
     else:
@@ -48,6 +60,9 @@ def tukey_window(length: int, fraction: float) -> np.ndarray:
         )
     window.flags.writeable = False
     return window
+
+
+_kept_tukey_window = functools.lru_cache(maxsize=4)(_tukey_window)
 
 
 @functools.lru_cache(maxsize=64)

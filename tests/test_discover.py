@@ -388,3 +388,26 @@ def test_a_sinusoid_at_a_harmonic_of_the_line_left_is_not_apart_from_it():
     assert Sinusoid(5.0).apart(line_at(0.0109), duration)
     assert Sinusoid(2.0).apart(line_at(1.37), duration)
     assert Sinusoid(1.37).apart(line_at(2.0), duration)
+
+
+def test_names_accepted_after_a_withdrawn_one_are_judged_again_without_it(monkeypatch):
+    """After a withdrawal the names left that were accepted after the first one withdrawn are
+    judged again in the final model (their log Bayes factor and runner-up were taken beside
+    it); those accepted before it keep their round's numbers, and the withdrawn are dropped,
+    in the search's order."""
+    from bayescal.inference import _discovery_search as search
+
+    judged = []
+
+    def judged_in(context, finding, current):
+        judged.append(finding)
+        return ("judged", finding, current)
+
+    monkeypatch.setattr(search, "_judged_in", judged_in)
+    first, withdrawn, later, also_withdrawn, last = (object() for _ in range(5))
+    accepted = [first, withdrawn, later, also_withdrawn, last]
+    left = search._judged_after_withdrawal(
+        "context", accepted, [also_withdrawn, withdrawn], "final"
+    )
+    assert left == [first, ("judged", later, "final"), ("judged", last, "final")]
+    assert judged == [later, last]

@@ -310,7 +310,7 @@ def search_effects(
     # Until what is left stands on the checks of the model without what was withdrawn: a
     # withdrawn term can have hidden what the others leave (a Gauss-Markov term that took
     # a sawtooth's harmonic, beside a sinusoid at its fundamental).
-    withdrawn = []
+    withdrawn, accepted = [], list(searched)
     while newly := withdrawn_findings(searched, judged, data, answers):
         report(f"withdrawing {', '.join(f.name for f in newly)}: checks still fail there")
         withdrawn += newly
@@ -325,6 +325,8 @@ def search_effects(
             if beside
             else checks
         )
+    if withdrawn:
+        searched = _judged_after_withdrawal(context, accepted, withdrawn, current)
     report("checking the final model")
     return SearchResult(
         context=context,
@@ -638,6 +640,22 @@ def _judged_in(context: Context, finding: Finding, current: ModelFit) -> Finding
         delta_elpd_se=gain_se,
         runner_up=runner_up,
     )
+
+
+def _judged_after_withdrawal(
+    context: Context, accepted: list, withdrawn: list, current: ModelFit
+) -> list:
+    """The findings ``accepted`` (in the search's order) less those ``withdrawn``; each
+    accepted after the first one withdrawn judged again in ``current``, the model without
+    what was withdrawn (:func:`_judged_in`): its log Bayes factor and runner-up were taken
+    beside a term the final model does not hold. Those accepted before it keep their round's
+    numbers, which it did not enter."""
+    first = min(accepted.index(finding) for finding in withdrawn)
+    return [
+        _judged_in(context, finding, current) if index > first else finding
+        for index, finding in enumerate(accepted)
+        if finding not in withdrawn
+    ]
 
 
 def _failing(checks: list[dict]) -> set[str]:

@@ -54,7 +54,6 @@ from scipy import special, stats
 
 from ..recording._series import is_spooled
 from ._periodogram import (
-    KEPT_TAPER_LENGTH,
     TAPER_FRACTION,
     RecordTransform,
     fast_length_at_most,
@@ -429,25 +428,6 @@ def _ordinate_correlation(length: int) -> float:
     return float(abs(np.dot(squares, shift)) ** 2 / np.sum(squares) ** 2)
 
 
-def _squared_taper(length: int) -> np.ndarray:
-    """The squared taper of ``length`` increments (the least squares' weight), read-only,
-    kept for the last length met up to :data:`KEPT_TAPER_LENGTH` (a notebook fits one record
-    again and again)."""
-    if length <= KEPT_TAPER_LENGTH:
-        return _kept_squared_taper(length)
-    return _made_squared_taper(length)
-
-
-def _made_squared_taper(length: int) -> np.ndarray:
-    """:func:`_squared_taper`, made."""
-    squares = tukey_window(length, TAPER_FRACTION) ** 2
-    squares.flags.writeable = False
-    return squares
-
-
-_kept_squared_taper = functools.lru_cache(maxsize=1)(_made_squared_taper)
-
-
 def _scale_dof(width: int, rho2: float) -> float:
     """Degrees of freedom of a sum of ``width`` neighbouring ordinates (2 each, less for
     their correlation ``rho2`` with their neighbours)."""
@@ -790,7 +770,7 @@ class _Spectrum:
         self._transform = transform  # the increments' tapered transform, where handed in
         self.size = increments.size
         self.taper = tukey_window(self.size, TAPER_FRACTION)
-        self.weight = _squared_taper(self.size)
+        self.weight = self.taper**2
         self.lowest, self.highest = LOWEST_CYCLES, (self.size - 1) // 2
         self.searched = max(self.highest - self.lowest + 1, 1)
         self.tests = self.searched * len(SCALES)

@@ -57,9 +57,10 @@ from ._periodogram import (
     TAPER_FRACTION,
     RecordTransform,
     fast_length_at_most,
-    increment_periodogram,
     longest_run,
+    tapered_transform,
     transform_power,
+    tukey_energy,
     tukey_window,
 )
 
@@ -453,6 +454,9 @@ def _scan(power, usable, lowest, highest, line_index, rho2, alpha):
     log_alpha = math.log(alpha)
     floors = _Floors(power, usable)
     most = 2 * 2 * FLOOR_ORDINATES[1]  # the F's denominator degrees of freedom, at most
+    # Each scale's ceilings are read before the next scale's are made: one array serves all
+    # (at 2^23 samples, 33 MB each that the kernel would hand out and zero again).
+    ceilings = np.empty(max(highest - lowest + 1, 0))
     for width in SCALES:
         stop = highest - width + 2
         if stop <= lowest:
@@ -460,7 +464,9 @@ def _scan(power, usable, lowest, highest, line_index, rho2, alpha):
         # A window of one ordinate sums it alone: no pass of np.convolve over the record.
         whole = power if width == 1 else np.convolve(power, np.ones(width), mode="valid")
         sums = whole[lowest:stop]
-        ceiling = _ceilings(sums, width, *floors.lower_bounds(lowest, stop, width))
+        ceiling = _ceilings(
+            sums, width, *floors.lower_bounds(lowest, stop, width), out=ceilings[: sums.size]
+        )
         dof = _scale_dof(width, rho2)
         # Significance's quantile a little low: its 1 - alpha rounds, and a window read in
         # excess costs a floor, one left unread a line.
@@ -488,11 +494,12 @@ def _scan(power, usable, lowest, highest, line_index, rho2, alpha):
     return results
 
 
-def _ceilings(sums, width: int, head, blocks, tail) -> np.ndarray:
+def _ceilings(sums, width: int, head, blocks, tail, out: np.ndarray) -> np.ndarray:
     """Each window's sum over ``width`` times its floor's lower bound
     (:meth:`_Floors.lower_bounds`: the first windows', one per block of the middle ones,
-    the last windows'), the block's bound broadcast over its windows (not repeated)."""
-    ceiling = np.empty(sums.size)
+    the last windows'), the block's bound broadcast over its windows (not repeated), written
+    into ``out`` (as long as ``sums``) and returned."""
+    ceiling = out
     middle = slice(head.size, head.size + blocks.size * SCREEN_BLOCK)
     shape = (blocks.size, SCREEN_BLOCK)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -764,13 +771,14 @@ class _Spectrum:
         offset: int,
         rate_hz: float,
         level: float,
-        transform: np.ndarray | None = None,
+        transform: RecordTransform | None = None,
     ):
         self.increments, self.offset, self.rate_hz = increments, offset, rate_hz
         self._transform = transform  # the increments' tapered transform, where handed in
         self.size = increments.size
-        self.taper = tukey_window(self.size, TAPER_FRACTION)
-        self.weight = self.taper**2
+        self.taper = (
+            tukey_window(self.size, TAPER_FRACTION) if transform is None else transform.taper
+        )
         self.lowest, self.highest = LOWEST_CYCLES, (self.size - 1) // 2
         self.searched = max(self.highest - self.lowest + 1, 1)
         self.tests = self.searched * len(SCALES)
@@ -778,19 +786,27 @@ class _Spectrum:
         self.rho2 = _ordinate_correlation(self.size)
         self._unfitted = self._unfitted_scan = None
 
+    @functools.cached_property
+    def weight(self) -> np.ndarray:
+        """The squared taper: the lines' least squares weights (made where lines are fitted:
+        a record without any never needs them)."""
+        return self.taper**2
+
     def periodogram(self, fitted: np.ndarray) -> np.ndarray:
         """The periodogram of the increments less ``fitted``. With nothing fitted it is the
         record's own, kept: the search's first round and the description of a record without
         lines both read it (an FFT of the whole record each), from the transform handed in
         where there is one."""
         if fitted.any():
-            return increment_periodogram(self.increments - fitted, self.taper)
+            _, transform = tapered_transform(self.increments - fitted, self.taper)
+            return transform_power(transform, tukey_energy(self.size, TAPER_FRACTION))
         if self._unfitted is None:
-            self._unfitted = (
-                increment_periodogram(self.increments, self.taper)
+            transform = (
+                tapered_transform(self.increments, self.taper)[1]
                 if self._transform is None
-                else transform_power(self._transform, self.taper)
+                else self._transform.transform
             )
+            self._unfitted = transform_power(transform, tukey_energy(self.size, TAPER_FRACTION))
         return self._unfitted
 
     def scan(self, power: np.ndarray, positions) -> list:
@@ -1141,9 +1157,7 @@ def find_lines(
     else:
         increments = np.diff(values[start:stop])
         increments = increments[: fast_length_at_most(increments.size)]
-    spectrum = _Spectrum(
-        increments, start, float(rate_hz), level, transform.transform if shared else None
-    )
+    spectrum = _Spectrum(increments, start, float(rate_hz), level, transform if shared else None)
     try:
         return _described(spectrum, *_search(spectrum, max_lines), level)
     finally:

@@ -41,23 +41,18 @@ def tukey_window(length: int, fraction: float) -> np.ndarray:
 
 
 def _tukey_window(length: int, fraction: float) -> np.ndarray:
-    """:func:`tukey_window`, made."""
-    if length <= 1:
-        window = np.ones(length)
-    else:
-        n = np.arange(length, dtype=float)
+    """:func:`tukey_window`, made in one array of the window's length: its flat middle
+    written once, its two cosine ends over it (at 2^23 points, three arrays of that length
+    fewer for the kernel to hand out and zero)."""
+    window = np.ones(length)
+    if length > 1:
         width = math.floor(fraction * (length - 1) / 2.0)
-        rising = n[: width + 1]
-        falling = n[length - width - 1 :]
+        rising = np.arange(width + 1, dtype=float)
+        falling = np.arange(length - width - 1, length, dtype=float)
         rising_phase = -1 + 2.0 * rising / fraction / (length - 1)
         falling_phase = -2.0 / fraction + 1 + 2.0 * falling / fraction / (length - 1)
-        window = np.concatenate(
-            (
-                0.5 * (1 + np.cos(np.pi * rising_phase)),
-                np.ones(max(length - 2 * width - 2, 0)),
-                0.5 * (1 + np.cos(np.pi * falling_phase)),
-            )
-        )
+        window[: width + 1] = 0.5 * (1 + np.cos(np.pi * rising_phase))
+        window[length - width - 1 :] = 0.5 * (1 + np.cos(np.pi * falling_phase))
     window.flags.writeable = False
     return window
 
@@ -87,6 +82,8 @@ class RecordTransform:
     stop: int
     increments: np.ndarray
     """The increments transformed (read-only)."""
+    taper: np.ndarray
+    """The taper they were transformed under (read-only): the readers' own, not made again."""
     mean: float
     """Their taper-weighted mean."""
     transform: np.ndarray
@@ -119,8 +116,9 @@ def longest_run_transform(values) -> RecordTransform | None:
     increments = np.diff(np.asarray(values[start:stop], dtype=float))
     increments = increments[: fast_length_at_most(increments.size)]
     increments.flags.writeable = False
-    mean, transform = tapered_transform(increments, tukey_window(increments.size, TAPER_FRACTION))
-    return RecordTransform(start, stop, increments, mean, transform)
+    taper = tukey_window(increments.size, TAPER_FRACTION)
+    mean, transform = tapered_transform(increments, taper)
+    return RecordTransform(start, stop, increments, taper, mean, transform)
 
 
 def tapered_transform(increments: np.ndarray, taper: np.ndarray) -> tuple[float, np.ndarray]:
@@ -133,18 +131,20 @@ def tapered_transform(increments: np.ndarray, taper: np.ndarray) -> tuple[float,
     return mean, transform
 
 
-def transform_power(transform: np.ndarray, taper: np.ndarray) -> np.ndarray:
-    """I_j at j = 0 .. M // 2 from the tapered transform of M increments under ``taper``
-    (:func:`tapered_transform`): its squared modulus / sum h^2, in place in one array (the
-    same operations in the same order as squaring, adding and dividing each whole)."""
+@functools.lru_cache(maxsize=16)
+def tukey_energy(length: int, fraction: float) -> float:
+    """sum h^2 of :func:`tukey_window` (``length``, ``fraction``): the periodogram's
+    normalization, kept per length (a number; the squared taper it is summed from is 64 MB at
+    2^23 points)."""
+    return float(np.sum(tukey_window(length, fraction) ** 2))
+
+
+def transform_power(transform: np.ndarray, energy: float) -> np.ndarray:
+    """I_j at j = 0 .. M // 2 from the tapered transform of M increments
+    (:func:`tapered_transform`) under a taper of sum of squares ``energy``
+    (:func:`tukey_energy`): its squared modulus / sum h^2, in place in one array (the same
+    operations in the same order as squaring, adding and dividing each whole)."""
     power = transform.real**2
     power += transform.imag**2
-    power /= np.sum(taper**2)
+    power /= energy
     return power
-
-
-def increment_periodogram(increments: np.ndarray, taper: np.ndarray) -> np.ndarray:
-    """I_j at j = 0 .. M // 2 of ``increments`` (M of them) under ``taper``: |DFT of the
-    tapered increments less their taper-weighted mean|^2 / sum h^2 (module docstring)."""
-    _, transform = tapered_transform(increments, taper)
-    return transform_power(transform, taper)

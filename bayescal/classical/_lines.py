@@ -499,18 +499,17 @@ def _ceilings(sums, width: int, head, blocks, tail, out: np.ndarray) -> np.ndarr
     (:meth:`_Floors.lower_bounds`: the first windows', one per block of the middle ones,
     the last windows'), the block's bound broadcast over its windows (not repeated), written
     into ``out`` (as long as ``sums``) and returned."""
-    ceiling = out
     middle = slice(head.size, head.size + blocks.size * SCREEN_BLOCK)
     shape = (blocks.size, SCREEN_BLOCK)
     with np.errstate(divide="ignore", invalid="ignore"):
-        np.divide(sums[: head.size], width * head, out=ceiling[: head.size])
+        np.divide(sums[: head.size], width * head, out=out[: head.size])
         np.divide(
             sums[middle].reshape(shape),
             (width * blocks)[:, None],
-            out=ceiling[middle].reshape(shape),
+            out=out[middle].reshape(shape),
         )
-        np.divide(sums[middle.stop :], width * tail, out=ceiling[middle.stop :])
-    return ceiling
+        np.divide(sums[middle.stop :], width * tail, out=out[middle.stop :])
+    return out
 
 
 def _exact(floors, sums, read, lowest, width, line_index, dof):

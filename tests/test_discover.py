@@ -368,6 +368,11 @@ def test_a_random_walk_beside_a_gauss_markov_term_is_found_with_its_time_constan
     assert sorted(named(found)) == ["gauss_markov", "rate_random_walk"]
     (markov,) = [f.effect for f in found.result.findings if f.name == "gauss_markov"]
     assert tau / 2 < markov.time_constant_s < 2 * tau
+    # Each name's numbers are of a model that holds it: the Gauss-Markov term's, accepted at
+    # another time constant, judged again in the final model.
+    for finding in found.result.findings:
+        assert finding.fit.spec.has_instance(finding.effect), finding.name
+        assert finding.fit is found.result.final or finding.name != "gauss_markov"
 
 
 def test_a_sinusoid_at_a_harmonic_of_the_line_left_is_not_apart_from_it():
@@ -390,11 +395,17 @@ def test_a_sinusoid_at_a_harmonic_of_the_line_left_is_not_apart_from_it():
     assert Sinusoid(1.37).apart(line_at(2.0), duration)
 
 
-def test_names_accepted_after_a_withdrawn_one_are_judged_again_without_it(monkeypatch):
+def test_names_are_judged_again_in_the_final_model_from_the_first_it_does_not_stand_behind(
+    monkeypatch,
+):
     """After a withdrawal the names left that were accepted after the first one withdrawn are
     judged again in the final model (their log Bayes factor and runner-up were taken beside
     it); those accepted before it keep their round's numbers, and the withdrawn are dropped,
-    in the search's order."""
+    in the search's order. A name whose round's model no longer holds its term (a
+    Gauss-Markov term whose time constant a later round moved) is judged again with every
+    name after it, withdrawal or not."""
+    from types import SimpleNamespace
+
     from bayescal.inference import _discovery_search as search
 
     judged = []
@@ -403,11 +414,24 @@ def test_names_accepted_after_a_withdrawn_one_are_judged_again_without_it(monkey
         judged.append(finding)
         return ("judged", finding, current)
 
+    def finding(held=True):
+        spec = SimpleNamespace(has_instance=lambda effect: held)
+        return SimpleNamespace(effect=object(), fit=SimpleNamespace(spec=spec))
+
     monkeypatch.setattr(search, "_judged_in", judged_in)
-    first, withdrawn, later, also_withdrawn, last = (object() for _ in range(5))
+    first, withdrawn, later, also_withdrawn, last = (finding() for _ in range(5))
     accepted = [first, withdrawn, later, also_withdrawn, last]
-    left = search._judged_after_withdrawal(
-        "context", accepted, [also_withdrawn, withdrawn], "final"
-    )
+    left = search._judged_in_final("context", accepted, [also_withdrawn, withdrawn], "final")
     assert left == [first, ("judged", later, "final"), ("judged", last, "final")]
     assert judged == [later, last]
+
+    judged.clear()
+    first, moved, later = finding(), finding(held=False), finding()
+    left = search._judged_in_final("context", [first, moved, later], [], "final")
+    assert left == [first, ("judged", moved, "final"), ("judged", later, "final")]
+    assert judged == [moved, later]
+
+    judged.clear()
+    unchanged = [finding(), finding()]
+    assert search._judged_in_final("context", unchanged, [], "final") == unchanged
+    assert judged == []

@@ -325,8 +325,7 @@ def search_effects(
             if beside
             else checks
         )
-    if withdrawn:
-        searched = _judged_after_withdrawal(context, accepted, withdrawn, current)
+    searched = _judged_in_final(context, accepted, withdrawn, current)
     report("checking the final model")
     return SearchResult(
         context=context,
@@ -642,17 +641,25 @@ def _judged_in(context: Context, finding: Finding, current: ModelFit) -> Finding
     )
 
 
-def _judged_after_withdrawal(
-    context: Context, accepted: list, withdrawn: list, current: ModelFit
-) -> list:
-    """The findings ``accepted`` (in the search's order) less those ``withdrawn``; each
-    accepted after the first one withdrawn judged again in ``current``, the model without
-    what was withdrawn (:func:`_judged_in`): its log Bayes factor and runner-up were taken
-    beside a term the final model does not hold. Those accepted before it keep their round's
-    numbers, which it did not enter."""
-    first = min(accepted.index(finding) for finding in withdrawn)
+def _judged_in_final(context: Context, accepted: list, withdrawn: list, current: ModelFit) -> list:
+    """The findings ``accepted`` (in the search's order) less those ``withdrawn``, each from
+    the first whose round's numbers the final model ``current`` does not stand behind judged
+    again in it (:func:`_judged_in`): the first accepted after one withdrawn (its log Bayes
+    factor and runner-up were taken beside a term the final model does not hold), or the
+    first whose round's model no longer holds its term (a Gauss-Markov term whose time
+    constant a later round moved, :func:`_moved`: its numbers were of the term at the time
+    constant it had then). Those before it keep their round's numbers, which nothing since
+    has changed. Judged at the end, not when the time constant moves: the search's own
+    decisions (:func:`_revisited`) read each round's numbers."""
+    stale = [accepted.index(finding) + 1 for finding in withdrawn]
+    stale += [
+        index
+        for index, finding in enumerate(accepted)
+        if finding not in withdrawn and not finding.fit.spec.has_instance(finding.effect)
+    ]
+    first = min(stale, default=len(accepted))
     return [
-        _judged_in(context, finding, current) if index > first else finding
+        _judged_in(context, finding, current) if index >= first else finding
         for index, finding in enumerate(accepted)
         if finding not in withdrawn
     ]

@@ -33,6 +33,7 @@ each figure was measured.
 
 import argparse
 import json
+import math
 import os
 import platform
 import subprocess
@@ -57,13 +58,16 @@ def child(samples: int, calls: int) -> dict:
     start = time.perf_counter()
     allan_wls_fit(values, RATE)
     peer = [time.perf_counter() - start]
-    times, cpu, stages, fit = [], [], [], None
+    times, cpu, system, faults, stages, fit = [], [], [], [], [], None
     for _ in range(calls):
         with timing() as stage_times:
-            start, start_cpu = time.perf_counter(), time.process_time()
+            start, start_cpu, start_usage = time.perf_counter(), time.process_time(), _usage()
             fit = bc.fit_noise(values, rate_hz=RATE, seed=1)
             times.append(time.perf_counter() - start)
             cpu.append(time.process_time() - start_cpu)
+            usage = _usage()
+            system.append(usage[0] - start_usage[0])
+            faults.append(usage[1] - start_usage[1])
         stages.append({name.split(" (")[0]: s for name, depth, s in stage_times if depth == 0})
     start = time.perf_counter()
     allan_wls_fit(values, RATE)
@@ -72,6 +76,8 @@ def child(samples: int, calls: int) -> dict:
         "peer_s": peer,
         "fit_s": times,
         "fit_cpu_s": cpu,
+        "fit_system_s": system,
+        "fit_page_faults": faults,
         "stages_s": stages,
         "steps": fit.diagnostics.n_steps,
         "terms": list(fit.terms),
@@ -79,6 +85,18 @@ def child(samples: int, calls: int) -> dict:
         "N": fit.parameters["N"].mean,
         **_devices(),
     }
+
+
+def _usage() -> tuple[float, int]:
+    """The process's system CPU time (s) and minor page faults so far: the kernel's share of a
+    call, which handing out and zeroing fresh large arrays makes (NaN where the platform does
+    not count them)."""
+    try:
+        import resource
+    except ImportError:  # not on Windows
+        return math.nan, 0
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_stime, usage.ru_minflt
 
 
 def _devices() -> dict:
@@ -133,9 +151,12 @@ def main() -> None:
                     f"load {os.getloadavg()[0]:.1f}",
                     flush=True,
                 )
+                system = ", ".join(f"{t:.2f}" for t in result["fit_system_s"])
+                faults = ", ".join(str(n) for n in result["fit_page_faults"])
                 print(
                     f"    CPU (all threads) {', '.join(f'{t:.2f}' for t in result['fit_cpu_s'])}"
-                    f" s; emcee {result['steps']} steps; the last call's stages: "
+                    f" s, of it the kernel's {system} s ({faults} page faults); emcee "
+                    f"{result['steps']} steps; the last call's stages: "
                     + ", ".join(f"{k} {v:.2f}" for k, v in result["stages_s"][-1].items()),
                     flush=True,
                 )

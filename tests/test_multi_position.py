@@ -6,6 +6,7 @@ command line's JSON, and bad input."""
 import csv
 import dataclasses
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -420,6 +421,12 @@ def test_bad_input(run_cli, tmp_path):
         [few, *channels, "--orientations", "six-face"],
         "found 5 still pose(s); a six-face calibration needs all six",
     )
+    # One pose: its direction is its own mean (the centre of one pose is the pose), and no
+    # numpy warning of a 0 / 0 reaches the user's terminal before the message.
+    single = write_session(tmp_path / "single.csv", [[0.0, 0.0, 1.0]], dwell_s=5.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        assert_refused(run_cli, tmp_path, [single, *channels], "found 1 still pose(s)", "s (+z)")
     directions = random_directions(rng, 12)
     readings = np.repeat(directions, 300, axis=0) + 0.001 * rng.standard_normal((12 * 300, 3))
     x, y, z = readings.T

@@ -272,8 +272,13 @@ def check_unit(poses: Poses, unit: str) -> None:
 
 
 def _rough_directions(mean: np.ndarray) -> np.ndarray:
+    """Each pose's rough gravity direction (unit rows): its mean about the rough centre
+    (:func:`_rough_centre`), or, where that leaves nothing (a single pose is its own centre),
+    its mean itself."""
     centred = mean - _rough_centre(mean)
-    return centred / np.linalg.norm(centred, axis=1, keepdims=True)
+    length = np.linalg.norm(centred, axis=1, keepdims=True)
+    rough = np.where(length > 0, centred, mean)
+    return rough / np.linalg.norm(rough, axis=1, keepdims=True)
 
 
 def distinct_orientations(poses: Poses) -> int:

@@ -3,6 +3,7 @@ argument), where the problem is, and what to do; and writes no output."""
 
 import os
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -150,6 +151,17 @@ def test_too_few_samples(run_cli, tmp_path, good_columns):
         "only 5 samples",
         "at least 16",
     )
+
+
+def test_a_single_row_is_too_few_samples(run_cli, tmp_path, good_columns):
+    """One row has no time step to read a rate from: refused for its length, with no numpy
+    warning (a median of no steps) on the terminal before the message."""
+    path = write_csv(tmp_path / "one.csv", {k: v[:1] for k, v in good_columns.items()})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        assert_rejected(
+            run_cli, tmp_path, [path, "--channel", "gyro_x"], "one.csv", "only 1 sample(s)"
+        )
 
 
 def test_too_few_samples_for_requested_tau(run_cli, tmp_path, good_columns):

@@ -1054,6 +1054,13 @@ def _time_base(
         )
     time, time_note, declared = _time_in_seconds(table, time_name, time_unit)
     steps = _check_time_order(time, _Place(row_offset=table.row_offset), table.source, time_name)
+    if steps.size == 0:  # one row: no step to read a rate from
+        raise InputError(
+            f"only {time.size} sample(s); at least {MIN_SAMPLES} are needed",
+            source=table.source,
+            column=time_name,
+            fix="record longer",
+        )
     # The unit of the stamps judged on the whole record, before any window is cut from it.
     period = _even_period(time, steps) or float(np.median(steps, overwrite_input=True))
     _check_rate(1.0 / period, declared, table.source, time_name)

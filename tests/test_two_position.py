@@ -4,6 +4,7 @@ and bad input."""
 
 import json
 import math
+import warnings
 
 import jax
 import numpy as np
@@ -142,6 +143,34 @@ def test_one_file_sections_are_found_and_reported(run_cli, tmp_path, session):
     assert classical["scale"]["unit"] == "m/s^2/(m/s^2)" and classical["si"]["scale"]["unit"] == "1"
     assert abs(classical["offset"]["value"] - OFFSET) < 5 * classical["offset"]["uncertainty"]
     assert result["gravity"]["value"] == pytest.approx(normal_gravity(40.1, 220.0))
+
+
+def test_a_bad_sample_on_another_axis_leaves_the_channel_to_find_its_sections(
+    run_cli, tmp_path, session
+):
+    """The other axes only help to find the still stretches: an infinity in one of them (not
+    the channel, which is checked on reading) once entered every running sum after it, and
+    no stretch was still ('found 0 still sections', after numpy's warnings); the channel now
+    judges alone. Called with one, find_static_sections names its argument."""
+    _, rows = session
+    rows = rows.copy()
+    rows[10, 1] = np.inf
+    names = ("time", "acc_x[m/s^2]", "acc_y[m/s^2]", "acc_z[m/s^2]")
+    columns = dict(zip(names, rows.T, strict=True))
+    path = write_csv(tmp_path / "bad_x.csv", columns, fmt="%.7f")
+    output = tmp_path / "out.json"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        code, _stdout, stderr = run_cli(
+            "two-position", path, "--channel", "acc_z", "--latitude", "40.1", "--json",
+            output, "--classical-only",
+        )  # fmt: skip
+    assert code == 0, stderr
+    sections = json.loads(output.read_text())["sections"]
+    assert sections["up"]["stop_s"] > 58 and sections["down"]["stop_s"] > 123
+    refusal = r"values: 1 sample\(s\) not finite, the first at index 10"
+    with pytest.raises(bc.InputError, match=refusal):
+        bc.find_static_sections(rows[:, 1:], RATE)
 
 
 def test_bayesian_json_contract(run_cli, tmp_path, session):

@@ -72,6 +72,10 @@ def _sections(args):
             and channel.values.size == recording.n_rows
         ):
             still_on = np.column_stack([recording.columns[name] for name in columns])
+            # The other axes only help to find the still stretches (the channel is checked
+            # on reading, they are not): one not finite, and the channel judges alone.
+            if not np.isfinite(still_on).all():
+                still_on = None
         up, down, found_by = sections_from_channel(channel, still_on, args.sections)
         return up, down, found_by, down.start_s - up.start_s, channel
     if not (args.up and args.down):

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._errors import InputError
 from ._inputs import samples_and_rate
 
 WINDOW_S = 0.25
@@ -82,6 +83,14 @@ def find_static_sections(
     values = np.asarray(values, dtype=float)
     if values.ndim == 1:
         values = values[:, None]
+    finite = np.isfinite(values).all(axis=1)
+    if not finite.all():
+        # One NaN or infinity would enter every running sum after it: no window still.
+        raise InputError(
+            f"values: {np.count_nonzero(~finite)} sample(s) not finite, the first at index "
+            f"{int(np.argmin(finite))}",
+            fix="repair or remove them, or pass the stretch without them",
+        )
     width = max(3, round(WINDOW_S * rate_hz))
     if values.shape[0] < 2 * width:
         return []

@@ -153,6 +153,23 @@ def test_too_few_samples(run_cli, tmp_path, good_columns):
     )
 
 
+def test_a_stamp_far_off_the_others_is_named(run_cli, tmp_path, good_columns):
+    """A corrupt first stamp (-1e300 s) leaves, taken from it, steps rounding has lost: the
+    time column is refused for it, with no numpy warning (a mean of no steps) before."""
+    good_columns["time"][0] = -1e300
+    path = write_csv(tmp_path / "far.csv", good_columns)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        assert_rejected(
+            run_cli,
+            tmp_path,
+            [path, "--channel", "gyro_x"],
+            "far.csv",
+            "column 'time'",
+            "too wide for their 0.01 s steps to be told apart from data row 3",
+        )
+
+
 def test_a_single_row_is_too_few_samples(run_cli, tmp_path, good_columns):
     """One row has no time step to read a rate from: refused for its length, with no numpy
     warning (a median of no steps) on the terminal before the message."""

@@ -201,10 +201,19 @@ def test_the_command_line_end_to_end(run_cli, files):
 
 def test_a_calibration_file_of_several_channels(files):
     folder, _ = files
-    with pytest.raises(bc.InputError, match="holds the calibrations of gyro_x, gyro_y, gyro_z"):
+    with pytest.raises(
+        bc.InputError, match="holds the calibrations of 'gyro_x', 'gyro_y', 'gyro_z'"
+    ):
         bc.load_thermal_calibration(folder / "old.json")
     with pytest.raises(bc.InputError, match="not of 'gyro_w'"):
         bc.load_thermal_calibration(folder / "old.json", channel="gyro_w")
+    # A name is quoted as Python writes it: one holding a line break keeps the message one line.
+    document = json.loads((folder / "old.json").read_text())
+    document["channels"]["gyro\nx"] = document["channels"].pop("gyro_x")
+    (folder / "odd.json").write_text(json.dumps(document))
+    with pytest.raises(bc.InputError, match=r"'gyro_z', 'gyro\\nx', not of 'gyro_x'") as refusal:
+        bc.load_thermal_calibration(folder / "odd.json", channel="gyro_x")
+    assert "\n" not in str(refusal.value)
     assert bc.load_thermal_calibration(folder / "old.json", channel="gyro_y").unit == "deg/s"
 
 

@@ -229,7 +229,7 @@ def channel_document(document, channel: str | None, source: str):
     if channel is None and len(channels) == 1:
         channel = next(iter(channels))
     if channel not in channels:
-        held = ", ".join(map(str, channels))
+        held = ", ".join(repr(str(name)) for name in channels)
         raise InputError(
             f"the file holds the calibrations of {held}"
             + ("" if channel is None else f", not of '{channel}'"),

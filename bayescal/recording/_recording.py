@@ -1064,8 +1064,21 @@ def _time_base(
     # The unit of the stamps judged on the whole record, before any window is cut from it.
     period = _even_period(time, steps) or float(np.median(steps, overwrite_input=True))
     _check_rate(1.0 / period, declared, table.source, time_name)
+    relative = time - time[0]
+    # A stamp far off the others (a corrupt row) leaves, taken from the first, steps that
+    # rounding has lost: no grid can be read from them.
+    lost = np.flatnonzero(np.diff(relative) <= 0)
+    if lost.size:
+        raise InputError(
+            f"the time stamps span {time[-1] - time[0]:.6g} s, too wide for their "
+            f"{period:.6g} s steps to be told apart from "
+            f"{_Place(row_offset=table.row_offset)(int(lost[0]) + 1)} on",
+            source=table.source,
+            column=time_name,
+            fix="repair the stamp far from the others, or pass --rate HZ",
+        )
     raw = table.columns[time_name]
-    return time - time[0], time_name, [time_note] if time_note else [], declared, raw
+    return relative, time_name, [time_note] if time_note else [], declared, raw
 
 
 def seconds_from_start(

@@ -1,7 +1,8 @@
 """Hostile input, generated: every command over malformed recordings, arguments and
 calibration files ends in exit 0 (with the right answer where the change cannot alter it),
 1 (a health check) or 2 (one line that says what is wrong, and no file left behind) — never
-in exit 3, never with a traceback.
+in exit 3, never with a traceback, and no numpy warning on the terminal before the message
+(a RuntimeWarning is an error here: pytest would otherwise capture what a user sees).
 
 Hypothesis draws the cases, derandomized (the same cases on every run) and bounded (unless a
 longer sweep is asked for, :data:`SWEEP`), on
@@ -21,6 +22,8 @@ import pytest
 hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
+
+pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")
 
 SWEEP = int(os.environ.get("BAYESCAL_FUZZ_SWEEP", "0"))
 """0 in the suite (derandomized, bounded); N > 0 a longer sweep: N times the cases, drawn at

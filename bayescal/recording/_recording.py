@@ -1075,7 +1075,7 @@ def _time_base(
             f"{_Place(row_offset=table.row_offset)(int(lost[0]) + 1)} on",
             source=table.source,
             column=time_name,
-            fix="repair the stamp far from the others, or pass --rate HZ",
+            fix="repair the stamp far from the others, or pass rate_hz=HZ",
         )
     raw = table.columns[time_name]
     return relative, time_name, [time_note] if time_note else [], declared, raw

@@ -4,6 +4,7 @@ that distribution's variances (the check that caught emcee's snooker move, whose
 Gaussian with its mean and covariance."""
 
 import numpy as np
+import pytest
 from emcee.autocorr import integrated_time
 
 from bayescal.inference import _mcmc
@@ -104,6 +105,7 @@ def _ridge(theta):
     return -0.5 * a**2 - 0.5 * ((b - 5 * a**2) / 0.01) ** 2
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")  # a stuck chain's 0 / 0, not on screen
 def test_a_run_that_cannot_explore_is_restarted_then_stops_early():
     """Stuck (acceptance below 0.1), a run is restarted from its unstranded walkers twice;
     still stuck, it stops long before the step limit, and its failure says so. Measured:

@@ -23,12 +23,12 @@ those of the records sampled alone (the random streams differ); their distributi
 
 import jax
 import numpy as np
-from emcee.autocorr import integrated_time
 
 from .._errors import InputError
 from ..models._noise_problem import NoiseProblem
 from ._mcmc import (
     FIRST_CHUNK,
+    autocorrelation_time,
     batch_log_density,
     diagnose,
     ensemble,
@@ -79,9 +79,6 @@ class _GroupOfWalkers:
     def get_chain(self, discard: int = 0):
         return self._sampler.get_chain(discard=discard)[:, self._walkers]
 
-    def get_autocorr_time(self, tol: float = 0):
-        return integrated_time(self.get_chain(), tol=tol)
-
 
 def sample_noise_each(
     problems,
@@ -131,7 +128,7 @@ def sample_noise_each(
         state = sampler.run_mcmc(state, steps)
         chain = sampler.get_chain()
         longer = np.array(
-            [long_enough(integrated_time(chain[:, g], tol=0), sampler.iteration) for g in groups]
+            [long_enough(autocorrelation_time(chain[:, g]), sampler.iteration) for g in groups]
         )
         converged |= longer & longer_before
         longer_before = longer

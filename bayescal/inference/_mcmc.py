@@ -322,7 +322,7 @@ def sample_ensemble(
         state = sampler.run_mcmc(state, steps)
         if bar is not None:
             bar.update(steps)
-        tau = sampler.get_autocorr_time(tol=0)
+        tau = autocorrelation_time(sampler.get_chain())
         longer = long_enough(tau, sampler.iteration)
         converged = longer and longer_before
         # Long enough, but R-hat or the ESS short of its bar: a borderline run (a biquad's
@@ -353,6 +353,15 @@ def laplace_start(start, covariance, rng, n_walkers: int) -> np.ndarray:
     covariance)."""
     spread = np.linalg.cholesky(covariance + 1e-12 * np.eye(start.size))
     return start + rng.standard_normal((n_walkers, start.size)) @ spread.T
+
+
+def autocorrelation_time(chain: np.ndarray) -> np.ndarray:
+    """Each parameter's integrated autocorrelation time over ``chain`` (steps, walkers, dim):
+    emcee's estimate (``integrated_time``, no tolerance), NaN where a parameter has not moved
+    (its autocorrelation is 0 / 0: a stuck run, which :func:`long_enough` reads as not long
+    enough and the restart judges), without numpy's warning of it on the user's terminal."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return emcee.autocorr.integrated_time(chain, tol=0)
 
 
 def long_enough(tau, steps: int) -> bool:
@@ -434,7 +443,7 @@ def _mixed(sampler, tau) -> bool:
 def diagnose(sampler, names, converged: bool, map_converged: bool):
     """The health checks of an emcee run, and the draws kept from it, (walkers, draws, dim):
     the same number for every run, so that functions of them compile once."""
-    tau = sampler.get_autocorr_time(tol=0)
+    tau = autocorrelation_time(sampler.get_chain())
     burn_in, by_walker, ess_of, rhat_of = _mixing(sampler, tau)
     steps = by_walker.shape[1]
     kept = np.unique(np.linspace(0, steps - 1, MAX_STORED_DRAWS // by_walker.shape[0]).round())

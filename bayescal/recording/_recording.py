@@ -1061,16 +1061,24 @@ def _time_base(
             column=time_name,
             fix="record longer",
         )
+    shortest = float(steps.min())
     # The unit of the stamps judged on the whole record, before any window is cut from it.
     period = _even_period(time, steps) or float(np.median(steps, overwrite_input=True))
     _check_rate(1.0 / period, declared, table.source, time_name)
     relative = time - time[0]
     # A stamp far off the others (a corrupt row) leaves, taken from the first, steps that
-    # rounding has lost: no grid can be read from them.
-    lost = np.flatnonzero(np.diff(relative) <= 0)
+    # rounding has lost: no grid can be read from them. Each difference is rounded by at most
+    # half a unit of the span's last place, so only a step as short as that unit can be lost:
+    # the stamps are read again only then.
+    span = float(time[-1] - time[0])
+    lost = (
+        np.flatnonzero(np.diff(relative) <= 0)
+        if shortest <= np.spacing(span)
+        else np.empty(0, dtype=int)
+    )
     if lost.size:
         raise InputError(
-            f"the time stamps span {time[-1] - time[0]:.6g} s, too wide for their "
+            f"the time stamps span {span:.6g} s, too wide for their "
             f"{period:.6g} s steps to be told apart from "
             f"{_Place(row_offset=table.row_offset)(int(lost[0]) + 1)} on",
             source=table.source,

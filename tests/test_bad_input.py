@@ -91,6 +91,30 @@ def test_empty_cell_is_missing_value(run_cli, tmp_path):
     assert_rejected(run_cli, tmp_path, [path, "--channel", "gyro_x"], "data row 501")
 
 
+def test_a_malformed_row_of_other_bytes_beside_a_cut_last_line(run_cli, tmp_path, monkeypatch):
+    """A CSV whose last line is cut short (left out) and which holds, past the first
+    megabyte the encoding is judged from, a row of three fields with bytes that are not
+    UTF-8: refused in one line naming the row, and nothing else on the terminal (pyarrow's
+    handler of invalid rows decoded that row's text and printed "Exception ignored ...
+    UnicodeDecodeError" before the refusal)."""
+    import sys
+
+    reported = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda report: reported.append(report.exc_value))
+    lines = [f"{k / 100:.2f},{0.01 * (k % 7):.2f}" for k in range(150_000)]
+    path = tmp_path / "pad.csv"
+    path.write_bytes(
+        "\n".join(["time,gyro_x", *lines[:140_000]]).encode()
+        + b"\n1400.00,0.01,\xff\xfe\n"
+        + "\n".join(lines[140_000:]).encode()
+        + b"\n1500.00"
+    )
+    assert_rejected(
+        run_cli, tmp_path, [path, "--channel", "gyro_x"], "Expected 2 columns, got 3: 1400.00,0.01"
+    )
+    assert reported == []
+
+
 @pytest.mark.parametrize(
     ("index", "value", "word"), [(700, 6.99, "duplicated"), (700, 6.5, "decreasing")]
 )

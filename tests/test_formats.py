@@ -745,8 +745,8 @@ def test_kalibr_export_waits_for_the_lock_and_reads_the_file_again(run_cli, tmp_
 
 
 def test_spreadsheet_and_logger_quirks(run_cli, tmp_path, plain):
-    """Excel's sep=; line, UTF-16 text, a last line cut short by a logger, a time column in
-    hours: each reads as the plain CSV."""
+    """Excel's sep=; line, UTF-16 text, a last line cut short by a logger (in UTF-8, UTF-16
+    and Latin-1), a time column in hours: each reads as the plain CSV."""
     time, gyro = plain["time"], plain["gyro"]
     expected, _ = _result(run_cli, plain["csv"], tmp_path)
     rows = _lines(time, gyro, ";")
@@ -761,6 +761,12 @@ def test_spreadsheet_and_logger_quirks(run_cli, tmp_path, plain):
     found, stdout = _result(run_cli, cut, tmp_path)
     assert "the last line ('15.0') is cut short" in stdout
     assert found["classical"] == expected["classical"]
+    for encoding in ("utf-16", "latin-1"):  # the stream ends before the cut line's bytes
+        text = "\n".join(["# Gerät 1", "time,gyro_x", *_lines(time, gyro), "15.0"])
+        cut.write_bytes(text.encode(encoding))
+        found, stdout = _result(run_cli, cut, tmp_path)
+        assert "the last line ('15.0') is cut short" in stdout
+        assert found["classical"] == expected["classical"]
     hours = write_csv(tmp_path / "hours.csv", {"time[h]": time / 3600, "gyro_x": gyro})
     found, _ = _result(run_cli, hours, tmp_path)
     assert found["rate_hz"] == RATE and found["classical"] == expected["classical"]

@@ -233,6 +233,16 @@ def sniff_table(path: Path, source: str, skip_rows: int) -> dict:
         if last and not tail.endswith(b"\n") and len(_fields(last[0], delimiter)) < width
         else None
     )
+    # The cut line's bytes, for a stream that ends before it (UTF-8 and Latin-1 end a line
+    # with the byte 0x0A, which no other character holds; UTF-16 spends two bytes on each
+    # of the line's code units, a bad one read as U+FFFD, also one unit).
+    cut_bytes = 0
+    if cut is not None:
+        cut_bytes = (
+            len(cut.encode("utf-16-le"))
+            if encoding == "utf-16"
+            else len(tail) - tail.rfind(b"\n") - 1
+        )
     preamble = 0
     for line in table:
         if len(_fields(line, delimiter)) == width:
@@ -262,6 +272,7 @@ def sniff_table(path: Path, source: str, skip_rows: int) -> dict:
         "has_header": has_header,
         "width": width,
         "cut_last_line": cut,
+        "cut_last_line_bytes": cut_bytes,
         "notes": ([note] if note else []) + metadata_notes,
     }
 
@@ -281,6 +292,7 @@ def text_arrow_options(path: Path, source: str, skip_rows: int, names: list[str]
     """How pyarrow reads the text table at ``path``: (source stream, read, parse and convert
     options, the reader's notes, what its metadata lines state) — for one read
     (:func:`read_text_arrow`) or a stream of blocks (:mod:`bayescal.recording._stream`)."""
+    import pyarrow as pa
     import pyarrow.csv as pa_csv
 
     layout = sniff_table(path, source, skip_rows)
@@ -332,6 +344,13 @@ def text_arrow_options(path: Path, source: str, skip_rows: int, names: list[str]
             0,
         )
         cut = None
+    elif cut is not None:
+        # The stream ends before the cut line. (Skipping it with pyarrow's handler of invalid
+        # rows decoded every invalid row's text as UTF-8 first: a malformed row of other
+        # bytes made pyarrow print an ignored exception on the user's terminal.)
+        mapped = pa.memory_map(str(path))
+        stream = pa.BufferReader(mapped.read_buffer(mapped.size() - layout["cut_last_line_bytes"]))
+        encoding = layout["encoding"]
     else:
         stream, encoding = path, layout["encoding"]
     read = pa_csv.ReadOptions(
@@ -340,12 +359,7 @@ def text_arrow_options(path: Path, source: str, skip_rows: int, names: list[str]
         encoding=encoding,
         block_size=1 << 24,
     )
-    parse = pa_csv.ParseOptions(
-        delimiter=delimiter,
-        invalid_row_handler=None
-        if cut is None
-        else lambda row: "skip" if row.text == cut else "error",
-    )
+    parse = pa_csv.ParseOptions(delimiter=delimiter)
     convert = pa_csv.ConvertOptions(decimal_point=layout["decimal_point"])
     return stream, read, parse, convert, notes, layout["metadata"]
 

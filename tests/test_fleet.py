@@ -440,8 +440,16 @@ def test_the_reweighted_draws_agree_with_a_joint_fit(local_fleet, fleet_files):
     data) against a joint fit of the raw records: every unit's ln N a parameter beside the
     population's, with the exact Whittle likelihood of each record and its bias's exact
     Gaussian likelihood (white noise: the bias's conditional mean does not depend on N, its
-    variance is N^2 times that at N = 1). Means and 90 % bounds within a third of the joint
-    posterior's sd (Monte Carlo error of either: about a twentieth)."""
+    variance is N^2 times that at N = 1). Means within a fifth of the joint posterior's sd,
+    90 % bounds within a half.
+
+    The tolerances are the Monte Carlo error's, measured: the fleet's 2,000 stored draws
+    against the joint's whole chain, over nine pairs of seeds (fleet seeds 0-2, joint seeds
+    3-5), the means' differences had an RMS of 0.044 sd (largest 0.10) and the 5 % and 95 %
+    quantiles' 0.11 sd (largest 0.31, the 95 % quantile of sigma_N, RMS 0.20: a tail that
+    few of a posterior's draws reach). Until 2026-11-27 every statistic had to be within a
+    third, which a change of the sampler's rounding alone took past (0.38 sd, with the
+    joint's 2,000 stored draws instead of its whole chain)."""
     joint = joint_fit(fleet_files[0], local_fleet)
     values = local_fleet.population.values
     hogg = {
@@ -462,7 +470,8 @@ def test_the_reweighted_draws_agree_with_a_joint_fit(local_fleet, fleet_files):
         for label, statistic in statistics.items()
     }
     shown = ", ".join(f"{key} {gap:+.2f}" for key, gap in apart.items())
-    assert all(abs(gap) < 1 / 3 for gap in apart.values()), shown
+    tolerance = {"mean": 0.2, "q05": 0.5, "q95": 0.5}
+    assert all(abs(gap) < tolerance[key.split()[-1]] for key, gap in apart.items()), shown
 
 
 def joint_fit(manifest, fleet) -> dict:
@@ -548,11 +557,14 @@ def joint_fit(manifest, fleet) -> dict:
         walker_count(mode.theta.size),
         40_000,
     )
-    diagnostics, kept = diagnose(
+    diagnostics, _ = diagnose(
         sampler, [f"x{i}" for i in range(mode.theta.size)], converged, mode.converged
     )
     assert diagnostics.passed, diagnostics.failures
-    flat = kept.reshape(-1, kept.shape[-1])[:, len(units) :]
+    # The whole chain after its burn-in, not the 2,000 draws a posterior keeps: the comparison's
+    # Monte Carlo error is then the fleet's alone.
+    chain = sampler.get_chain(discard=diagnostics.burn_in, flat=True)
+    flat = chain[:, len(units) :]
     values = {k: np.asarray(v) for k, v in hyper.unpack(jnp.asarray(flat)).items()}
     return {
         "mu_N": values["mu"][:, 0],

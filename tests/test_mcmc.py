@@ -1,8 +1,9 @@
 """The sampler leaves the posterior invariant: its stored draws of a known distribution have
 that distribution's variances (the check that caught emcee's snooker move, whose draws were
-2-3 % too narrow in sd), and its move, a whole step in one compiled call, samples a known
-Gaussian with its mean and covariance."""
+2-3 % too narrow in sd); its move, made a block of steps in one compiled call, samples a known
+Gaussian with its mean and covariance, and makes the steps emcee's own loop makes."""
 
+import emcee
 import numpy as np
 import pytest
 from emcee.autocorr import integrated_time
@@ -40,9 +41,10 @@ GROUPS, GROUP_WALKERS, STEPS = 64, 4, 3000
 
 def test_the_compiled_move_samples_a_known_gaussian():
     """64 groups of 4 walkers, each group an ensemble of its own on one correlated 2-D Gaussian
-    (the move's smallest groups, where a wrong step shows most), 3,000 steps, one compiled call
-    each: the draws after the first tenth have the target's mean (within 0.02 sd), variances
-    (ratio within 0.03 of 1) and correlation 0.6 (within 0.015).
+    (the move's smallest groups, where a wrong step shows most), 3,000 steps, a block of them in
+    one compiled call (:func:`~bayescal.inference._mcmc.advance`): the draws after the first
+    tenth have the target's mean (within 0.02 sd), variances (ratio within 0.03 of 1) and
+    correlation 0.6 (within 0.015).
 
     About 66,000 effective draws a coordinate (autocorrelation time 10-11 steps): the mean's
     Monte Carlo sd is 0.004 sd, the variance ratio's and the correlation's about 0.005; the
@@ -63,7 +65,7 @@ def test_the_compiled_move_samples_a_known_gaussian():
     start = (
         TARGET_MEAN + rng.standard_normal((walkers, 2)) @ np.linalg.cholesky(TARGET_COVARIANCE).T
     )
-    sampler.run_mcmc(start, STEPS)
+    _mcmc.advance(sampler, start, STEPS)
     chain = sampler.get_chain(discard=STEPS // 10)
     draws = chain.reshape(-1, 2)
     sd = np.sqrt(np.diag(TARGET_COVARIANCE))
@@ -74,6 +76,64 @@ def test_the_compiled_move_samples_a_known_gaussian():
     correlation = covariance[0, 1] / np.sqrt(covariance[0, 0] * covariance[1, 1])
     assert abs(correlation - 0.6) < 0.015, correlation
     assert np.all(integrated_time(chain, tol=0) < 15)  # the effective draws assumed above
+
+
+@pytest.mark.parametrize("groups", [1, 3])
+def test_the_compiled_blocks_make_emcees_own_steps(groups):
+    """``advance`` against emcee's ``run_mcmc`` from the same seed, on a correlated 2-D
+    Gaussian: a fresh start then a run on from the state (37 steps, not a whole number of
+    blocks: the last block padded), one group and three. The same steps from the same random
+    numbers: the same positions, the same walkers accepted, log densities equal to rounding,
+    and the generator left where emcee's leaves it. The walkers start on the integers and move
+    by gamma = 1 (sigma 0: its normals are drawn all the same), so that every proposal is
+    exact in any arithmetic (a compiled block may fuse the proposal's multiply-add, 1e-15 off
+    numpy's, which differential evolution amplifies step by step). Mutated, it fails: without
+    the uniform emcee draws for its choice of move each step, the chains part at once."""
+    models = (
+        np.tile(TARGET_MEAN, (groups, 1)),
+        np.tile(np.linalg.inv(TARGET_COVARIANCE), (groups, 1, 1)),
+    )
+    walkers, runs = groups * 8, []
+    start = np.random.default_rng(4).integers(-4, 5, size=(walkers, 2)).astype(float)
+    for run in (lambda sampler, state, steps: sampler.run_mcmc(state, steps), _mcmc.advance):
+        log_density = batch_log_density(_gaussian, models, grouped=True)
+        sampler = emcee.EnsembleSampler(
+            walkers,
+            2,
+            log_density,
+            vectorize=True,
+            moves=_mcmc.GroupedDEMove(groups, sigma=0.0, gamma0=1.0),
+        )
+        sampler.log_prob_fn = log_density  # unwrapped, as ``ensemble`` leaves it
+        sampler.random_state = np.random.RandomState(7).get_state()
+        run(sampler, run(sampler, start, 60), 37)
+        runs.append(sampler)
+    emcee_run, blocks = runs
+    assert blocks.iteration == emcee_run.iteration == 97
+    np.testing.assert_array_equal(blocks.get_chain(), emcee_run.get_chain())
+    np.testing.assert_allclose(blocks.get_log_prob(), emcee_run.get_log_prob(), rtol=1e-12)
+    np.testing.assert_array_equal(blocks.backend.accepted, emcee_run.backend.accepted)
+    assert 0.1 < np.mean(blocks.acceptance_fraction) < 0.9  # the walkers did move
+    assert str(blocks.random_state) == str(emcee_run.random_state)
+
+
+def _nan_beyond_two(model, x):
+    """A log density that is NaN where the first coordinate passes 2."""
+    return _gaussian(model, x) + (x[0] > 2.0) * np.nan
+
+
+def test_a_nan_log_density_stops_a_block_as_it_stops_emcee():
+    """Walkers that meet a NaN region after their first step: ``advance`` raises emcee's
+    error as emcee's loop does, rather than storing steps through it."""
+    model = (np.zeros(2), np.eye(2))
+    start = np.random.default_rng(0).normal(0.0, 0.3, size=(16, 2))
+    for run in (lambda sampler, state, steps: sampler.run_mcmc(state, steps), _mcmc.advance):
+        sampler = ensemble(
+            batch_log_density(_nan_beyond_two, model), 16, 2, np.random.default_rng(1)
+        )
+        with pytest.raises(ValueError, match="NaN"):
+            run(sampler, start, 500)
+        assert sampler.iteration >= 1  # not emcee's first step: a block's
 
 
 def test_stored_draws_have_the_target_variances():

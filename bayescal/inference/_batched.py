@@ -28,6 +28,7 @@ from .._errors import InputError
 from ..models._noise_problem import NoiseProblem
 from ._mcmc import (
     FIRST_CHUNK,
+    advance,
     autocorrelation_time,
     batch_log_density,
     diagnose,
@@ -125,7 +126,7 @@ def sample_noise_each(
     longer_before, chunk = converged.copy(), FIRST_CHUNK
     while sampler.iteration < max_steps:
         steps = min(chunk, max_steps - sampler.iteration)
-        state = sampler.run_mcmc(state, steps)
+        state = advance(sampler, state, steps)
         chain = sampler.get_chain()
         longer = np.array(
             [long_enough(autocorrelation_time(chain[:, g]), sampler.iteration) for g in groups]

@@ -6,7 +6,7 @@ in free inertial navigation.
     nice -n 10 python benchmarks/infield_taxi.py [--scenarios 100] [--rate 100] [--seed 0]
         [--aging 4] [--aging-shape drift|level] [--tactical] [--park-s 1200]
         [--warmup 20:38.6] [--wander 0.5:20] [--gnss SD] [--workers 1] [--no-ablations]
-        [--every 10]
+        [--every 10] [--dump FILE]
 
 Each scenario: benchmarks/infield_alignment.py's park (navigation grade, 20 minutes, latitude
 45 deg, heading 30 deg, warming 20 -> 38.6 degC), aged by ``--aging`` times the calibration's
@@ -63,10 +63,15 @@ velocity's sd, not of the information per second.
 WORKER_ENV is set before they import numpy or JAX); each scenario is seeded by its own seed,
 so the figures are those of the serial run. ``--no-ablations`` keeps the two updates the main
 figures need (taxi, not aged) and drops the no-taxi and heading-forced-to-zero ones.
+``--dump FILE`` writes one JSON line per scenario (``scenario_record``): what the misses have
+in common is read from it (which seeds, the heading's z beside the east level's, the learned
+aging scale), not from the coverage alone.
 """
 
 import argparse
+import contextlib
 import functools
+import json
 import math
 import os
 import time
@@ -153,12 +158,20 @@ def summarize(park, result, seconds: float, rate: float, final_heading: float) -
         heading["q05"] <= true_error <= heading["q95"],
     )
     row["correlation"] = heading["correlation_with_east_level"]
-    covered = []
+    covered, scores = [], []
     for name in GYROS:
         true = np.asarray(park.truth["thermal"][name]["coefficients"])
-        low, high = np.quantile(result.coefficient_draws[name], [0.05, 0.95], axis=0)
+        draws = result.coefficient_draws[name]
+        low, high = np.quantile(draws, [0.05, 0.95], axis=0)
         covered.extend(((low <= true) & (true <= high)).tolist())
+        scores.extend(((draws.mean(axis=0) - true) / draws.std(axis=0)).tolist())
     row["coefficients"] = covered
+    # For --dump: each coefficient's error over its posterior sd (x, y, z; c0, c1, c2 each)
+    # and the learned aging scale over the simulated one.
+    row["coefficient_z"] = scores
+    aging = math.radians(park.truth["thermal"][GYROS[0]]["aging_scale"])  # deg/s -> rad/s
+    learned = float(np.median(result.posterior.drift))  # rad/s
+    row["drift_over_truth"] = learned / aging if aging > 0 else math.nan
     return row
 
 
@@ -274,6 +287,22 @@ def one_scenario(
         if extra:
             rows[name]["payoff"] = payoff(parks[aged], result, old)
     return rows
+
+
+def scenario_record(seed: int, rows: dict) -> dict:
+    """One scenario's line of ``--dump``: per update, the heading error's and the north and
+    east levels' error, posterior sd and z (error / sd; deg, deg/h), the learned aging scale
+    over the simulated one, and every coefficient's z (x, y, z; c0, c1, c2 each)."""
+    record = {"seed": seed}
+    for name, row in rows.items():
+        entry = {
+            key: {"error": row[key][0], "sd": row[key][1], "z": row[key][0] / row[key][1]}
+            for key in ("heading", "east", "north")
+        }
+        entry["drift_over_truth"] = row["drift_over_truth"]
+        entry["coefficient_z"] = row["coefficient_z"]
+        record[name] = entry
+    return record
 
 
 def report(name: str, rows: list[dict]) -> None:
@@ -444,6 +473,12 @@ def main() -> None:
     )
     parser.add_argument("--workers", type=int, default=1, help="processes, one thread each")
     parser.add_argument(
+        "--dump",
+        metavar="FILE",
+        help="write one JSON line per scenario: each update's heading, east and north level "
+        "errors, sds and z, the learned aging scale over the truth, the coefficients' z",
+    )
+    parser.add_argument(
         "--no-ablations",
         dest="ablations",
         action="store_false",
@@ -472,18 +507,22 @@ def main() -> None:
     started = time.perf_counter()
     results: dict[str, list] = {}
     seeds = [args.seed + index for index in range(args.scenarios)]
-    for index, rows in enumerate(scenarios(seeds, options, args.workers)):
-        for name, row in rows.items():
-            results.setdefault(name, []).append(row)
-        if (index + 1) % args.every == 0 or index + 1 == args.scenarios:
-            elapsed = time.perf_counter() - started
-            print(
-                f"... {index + 1} scenarios, {elapsed:.0f} s wall "
-                f"({elapsed / (index + 1):.0f} s per scenario)",
-                flush=True,
-            )
-            for name, collected in results.items():
-                report(name, collected)
+    with open(args.dump, "w") if args.dump else contextlib.nullcontext() as dump:
+        for index, rows in enumerate(scenarios(seeds, options, args.workers)):
+            for name, row in rows.items():
+                results.setdefault(name, []).append(row)
+            if args.dump:
+                dump.write(json.dumps(scenario_record(seeds[index], rows)) + "\n")
+                dump.flush()
+            if (index + 1) % args.every == 0 or index + 1 == args.scenarios:
+                elapsed = time.perf_counter() - started
+                print(
+                    f"... {index + 1} scenarios, {elapsed:.0f} s wall "
+                    f"({elapsed / (index + 1):.0f} s per scenario)",
+                    flush=True,
+                )
+                for name, collected in results.items():
+                    report(name, collected)
 
 
 if __name__ == "__main__":

@@ -566,6 +566,29 @@ def test_the_taxi_benchmark_gives_its_wander_to_the_vehicle_and_to_the_update(mo
     assert [u.get("wander") for u in updates] == [taxi.WANDER] * 2 + [None] * 2
 
 
+def test_the_taxi_benchmarks_dump_gives_each_updates_z_and_its_learned_aging():
+    """benchmarks/infield_taxi.py's ``--dump`` line (``scenario_record``): per update, the
+    heading's and the levels' error, sd and z = error / sd (what tells a miss of the heading
+    from one of the east level), the learned aging scale over the simulated one and the
+    coefficients' z, under the scenario's seed."""
+    taxi = load_benchmark("infield_taxi")
+    row = {
+        "heading": (-0.07, 0.02, math.nan, False),
+        "east": (0.014, 0.0046, 0.011, False),
+        "north": (-0.002, 0.004, 0.012, True),
+        "drift_over_truth": 0.85,
+        "coefficient_z": [0.5] * 9,
+    }
+    record = taxi.scenario_record(31, {"taxi": row, "not aged": {**row, "drift_over_truth": 1.0}})
+    assert record["seed"] == 31 and list(record) == ["seed", "taxi", "not aged"]
+    assert record["taxi"]["heading"] == {"error": -0.07, "sd": 0.02, "z": pytest.approx(-3.5)}
+    assert record["taxi"]["east"]["z"] == pytest.approx(0.014 / 0.0046)
+    assert record["taxi"]["drift_over_truth"] == 0.85
+    assert record["not aged"]["drift_over_truth"] == 1.0
+    assert record["taxi"]["coefficient_z"] == [0.5] * 9
+    json.dumps(record)  # one JSON line
+
+
 def _taxi_command(folder, end: float) -> tuple:
     """``bayescal thermal infield`` on the taxi_run fixture's record: its park, its taxi to
     ``end`` s and the two legs' headings."""

@@ -48,13 +48,6 @@ def noise_mode(problem: NoiseProblem) -> Mode:
     )
 
 
-@persistent_jit
-def log_likelihood_at(problem: NoiseProblem, theta):
-    """The total Whittle log-likelihood of ``problem`` (:meth:`NoiseProblem.for_likelihood`)
-    at ``theta``: one compiled call."""
-    return jnp.sum(problem.pointwise_log_likelihood(theta))
-
-
 def noise_model(problem: NoiseProblem, values: dict) -> NoiseModel:
     """The :class:`NoiseModel` of ``problem`` at parameter ``values`` (natural units, of the
     terms switched on; arrays broadcast, except a low-pass filter's, which are numbers), with

@@ -7,6 +7,7 @@ not hold start twice — at the prior centre and well below it, where the absent
 because the log density has a second basin there.
 """
 
+import math
 from collections.abc import Callable
 
 import equinox as eqx
@@ -24,11 +25,13 @@ MAX_STEPS = 2000
 
 class Mode(eqx.Module):
     """The maximum a posteriori point: the coordinates, the Hessian of the negative log
-    density there, and whether its optimisation converged."""
+    density there, whether its optimisation converged, and the log density there."""
 
     theta: np.ndarray
     hessian: np.ndarray
     converged: bool
+    log_density: float = math.nan
+    """The log density at ``theta`` (as the optimiser evaluated it; -inf where not finite)."""
 
     @property
     def covariance(self) -> np.ndarray:
@@ -37,8 +40,9 @@ class Mode(eqx.Module):
 
 
 def _solve(log_density, model, starts):
-    """The best of BFGS's optima from ``starts``, the Hessian there and whether it converged
-    (traced: :func:`_minimise` compiles it for one model, :func:`_minimise_each` for a stack)."""
+    """The best of BFGS's optima from ``starts``, the Hessian there, whether it converged and
+    the log density there (traced: :func:`_minimise` compiles it for one model,
+    :func:`_minimise_each` for a stack)."""
 
     def objective(theta, _):
         return -log_density(model, theta)
@@ -55,7 +59,8 @@ def _solve(log_density, model, starts):
     for index, solution in enumerate(solutions[1:], start=1):
         best = jnp.where(pick == index, solution.value, best)
         converged = jnp.where(pick == index, solution.result == optx.RESULTS.successful, converged)
-    return best, jax.hessian(lambda theta: objective(theta, None))(best), converged
+    hessian = jax.hessian(lambda theta: objective(theta, None))(best)
+    return best, hessian, converged, -jnp.min(values)
 
 
 _minimise = persistent_jit(_solve)
@@ -80,8 +85,10 @@ def maximum_a_posteriori(
     """
     require_x64()
     starts = (starts,) if not isinstance(starts, (tuple, list)) else tuple(starts)
-    best, hessian, converged = _minimise(log_density, model, tuple(jnp.asarray(s) for s in starts))
-    return Mode(np.asarray(best), np.asarray(hessian), bool(converged))
+    best, hessian, converged, value = _minimise(
+        log_density, model, tuple(jnp.asarray(s) for s in starts)
+    )
+    return Mode(np.asarray(best), np.asarray(hessian), bool(converged), float(value))
 
 
 def maximum_a_posteriori_each(log_density: Callable, models, starts: tuple) -> list[Mode]:
@@ -90,8 +97,8 @@ def maximum_a_posteriori_each(log_density: Callable, models, starts: tuple) -> l
     (a tuple of (models, dimension) arrays), in one compiled call; each keeps its own
     convergence status."""
     require_x64()
-    best, hessian, converged = _minimise_each(
-        log_density, models, tuple(jnp.asarray(s) for s in starts)
-    )
-    best, hessian, converged = np.asarray(best), np.asarray(hessian), np.asarray(converged)
-    return [Mode(best[i], hessian[i], bool(converged[i])) for i in range(best.shape[0])]
+    solved = _minimise_each(log_density, models, tuple(jnp.asarray(s) for s in starts))
+    best, hessian, converged, value = (np.asarray(array) for array in solved)
+    return [
+        Mode(best[i], hessian[i], bool(converged[i]), float(value[i])) for i in range(best.shape[0])
+    ]

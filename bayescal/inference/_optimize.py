@@ -7,7 +7,6 @@ not hold start twice — at the prior centre and well below it, where the absent
 because the log density has a second basin there.
 """
 
-import math
 from collections.abc import Callable
 
 import equinox as eqx
@@ -30,7 +29,7 @@ class Mode(eqx.Module):
     theta: np.ndarray
     hessian: np.ndarray
     converged: bool
-    log_density: float = math.nan
+    log_density: float
     """The log density at ``theta`` (as the optimiser evaluated it; -inf where not finite)."""
 
     @property

@@ -4,7 +4,7 @@ cover, how far the taxi narrows the east bias level, the ablations, and what the
 in free inertial navigation.
 
     nice -n 10 python benchmarks/infield_taxi.py [--scenarios 100] [--rate 100] [--seed 0]
-        [--aging 4] [--aging-shape drift|level] [--tactical] [--park-s 1200]
+        [--aging 4] [--aging-shape drift|level] [--tactical] [--given-aging] [--park-s 1200]
         [--warmup 20:38.6] [--wander 0.5:20] [--gnss SD] [--workers 1] [--no-ablations]
         [--every 10] [--dump FILE]
 
@@ -37,6 +37,8 @@ and new); the horizontal position error after 1 h of free inertial navigation (p
 250 m/s turning 90 deg every 15 min; ``InFieldUpdate.position_error``) with the old and the
 updated calibrations, the gyros at the park's mean temperature and at the taxi's end, and how
 often the posterior's predicted 90 % region (chi^2, 2 dof) holds the realised error.
+``--given-aging``: every update is given its record's simulated aging scale (``drift=``;
+zero where not aged) instead of learning it: what the learned aging costs or not.
 ``--park-s`` and ``--warmup`` change the park's length and its temperatures (start:end, degC):
 what the data must span for the updated calibration to hold over the calibrated range
 (benchmarks/infield_ideal.py gives the least bias error any update can reach on these
@@ -235,6 +237,7 @@ def one_scenario(
     ablations: bool = True,
     gnss: float | None = None,
     aging_shape: str = "drift",
+    given_aging: bool = False,
 ) -> dict:
     import bayescal as bc
     from bayescal.navigation import _alignment
@@ -269,6 +272,14 @@ def one_scenario(
         runs["positions, no track"] = (aging, {"taxi": (park_s, end), **fixes}, -1)
     if not ablations:
         runs = {name: run for name, run in runs.items() if name not in ABLATIONS}
+    if given_aging:
+        # Each record's aging scale as simulated (its aging times the calibrated sd of c0,
+        # the same for all three gyros; zero where not aged), given instead of learned.
+        sd = math.sqrt(float(np.asarray(next(iter(old.values())).covariance)[0, 0]))
+        runs = {
+            name: (aged, {**extra, "drift": aged * sd}, last)
+            for name, (aged, extra, last) in runs.items()
+        }
     rows = {}
     for name, (aged, extra, last) in runs.items():
         saved = _alignment.HEADING_PRIOR
@@ -412,6 +423,7 @@ def scenario(seed: int, options: dict) -> dict:
         options["ablations"],
         options["gnss"],
         options["aging_shape"],
+        options["given_aging"],
     )
 
 
@@ -462,6 +474,11 @@ def main() -> None:
         "level c0 alone (level); the update is not told",
     )
     parser.add_argument("--tactical", action="store_true", help="ARW 0.05 deg/sqrt(h) gyros")
+    parser.add_argument(
+        "--given-aging",
+        action="store_true",
+        help="give every update the simulated aging scale (drift=) instead of learning it",
+    )
     parser.add_argument("--park-s", type=float, default=1200.0, help="the park's length, s")
     parser.add_argument("--warmup", default="20:38.6", help="START:END degC over the park")
     parser.add_argument("--gnss", type=float, help="GNSS fixes of this sd (m) in the taxi")
@@ -492,6 +509,7 @@ def main() -> None:
         "rate": args.rate,
         "aging": args.aging,
         "aging_shape": args.aging_shape,
+        "given_aging": args.given_aging,
         "tactical": args.tactical,
         "park": {"duration_s": args.park_s, "warmup": pair(args.warmup, "--warmup")},
         "wander": wander,

@@ -528,7 +528,8 @@ def test_the_taxi_benchmark_gives_its_wander_to_the_vehicle_and_to_the_update(mo
     """benchmarks/infield_taxi.py's ``--wander SD:TAU`` reaches both the simulated vehicle
     (bc.Taxi's wander_sd, wander_time_s) and every taxi update (``wander=(sd, tau)``), and
     ``--no-ablations`` leaves the two updates the main figures need (taxi, not aged), and
-    ``--aging-shape`` reaches the simulated sensor (the update is not told it). The
+    ``--aging-shape`` reaches the simulated sensor (the update is not told it), and
+    ``--given-aging`` gives each update its record's simulated aging scale. The
     simulator and the update are stand-ins here: what is tested is the wiring, which decides
     whether the figure is measured at the wander it is said to be."""
     taxi = load_benchmark("infield_taxi")
@@ -564,6 +565,11 @@ def test_the_taxi_benchmark_gives_its_wander_to_the_vehicle_and_to_the_update(mo
     rows = taxi.one_scenario(7, old, 10.0, 4.0)
     assert list(rows) == ["taxi", "not aged", "no taxi", "heading forced to zero"]
     assert [u.get("wander") for u in updates] == [taxi.WANDER] * 2 + [None] * 2
+    assert not any("drift" in u for u in updates)  # learned unless --given-aging
+    updates.clear()
+    taxi.one_scenario(7, old, 10.0, 4.0, given_aging=True)
+    scale = 4.0 * math.sqrt(old["gyro_x"].covariance[0][0])  # the simulator's s (all gyros)
+    assert [u["drift"] for u in updates] == pytest.approx([scale, 0.0, scale, scale])
 
 
 def test_the_taxi_benchmarks_dump_gives_each_updates_z_and_its_learned_aging():

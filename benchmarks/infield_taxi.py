@@ -273,11 +273,14 @@ def one_scenario(
     if not ablations:
         runs = {name: run for name, run in runs.items() if name not in ABLATIONS}
     if given_aging:
-        # Each record's aging scale as simulated (its aging times the calibrated sd of c0,
-        # the same for all three gyros; zero where not aged), given instead of learned.
-        sd = math.sqrt(float(np.asarray(next(iter(old.values())).covariance)[0, 0]))
+        # Each record's aging scale as the simulator drew it (one scale for the three gyros;
+        # zero where not aged), given instead of learned.
         runs = {
-            name: (aged, {**extra, "drift": aged * sd}, last)
+            name: (
+                aged,
+                {**extra, "drift": parks[aged].truth["thermal"][GYROS[0]]["aging_scale"]},
+                last,
+            )
             for name, (aged, extra, last) in runs.items()
         }
     rows = {}

@@ -26,12 +26,13 @@ FOUNDATION = (
     "bayescal._errors",
     "bayescal._output",
     "bayescal._caches",
+    "bayescal._threads",
     "bayescal._stages",
     "bayescal._x64",
     "bayescal",
 )
 """Imported by every layer: the errors, the atomic writer, the compilation caches, the
-stages' timer, JAX's precision, the lazy public names."""
+threads of the parallel steps, the stages' timer, JAX's precision, the lazy public names."""
 
 
 def module_name(path: Path) -> str:

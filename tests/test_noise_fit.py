@@ -132,8 +132,8 @@ def test_a_term_the_evidence_rejects_is_never_taken_on_to_mend_a_check():
     chosen = frozenset({"white", "butterworth_filter"})
     gains = {"decimation_filter": -151.0, "rate_random_walk": -0.7, "quantization": -2.6}
 
-    def gain(model, term):
-        return gains[term]
+    def gains_of(model, terms):
+        return {term: gains[term] for term in terms}
 
     def misfit_unless(mender):
         return lambda model: "" if mender in model else "an excess at 0.05-0.1 Hz"
@@ -141,11 +141,11 @@ def test_a_term_the_evidence_rejects_is_never_taken_on_to_mend_a_check():
     threshold = np.log(100.0)
     candidates = tuple(gains)
     model, added = _until_it_fits(
-        Families(), chosen, candidates, misfit_unless("decimation_filter"), gain, threshold
+        Families(), chosen, candidates, misfit_unless("decimation_filter"), gains_of, threshold
     )
     assert model == chosen and added == {}
     model, added = _until_it_fits(
-        Families(), chosen, candidates, misfit_unless("rate_random_walk"), gain, threshold
+        Families(), chosen, candidates, misfit_unless("rate_random_walk"), gains_of, threshold
     )
     assert model == chosen | {"rate_random_walk"}
     assert added == {"rate_random_walk": "an excess at 0.05-0.1 Hz"}

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import fft, stats
 
+from .._threads import usable_cores
 from ..classical._allan import allan_deviation
 from ..classical._edf import equivalent_degrees_of_freedom
 from ..models._composite import (
@@ -188,7 +189,8 @@ def line_search(fit: ModelFit, rate_hz: float) -> tuple[float, float, int]:
     increments = np.diff(np.where(finite, residual, np.nanmean(residual)))
     length = increments.size
     taper = tukey_window(length, 0.1)
-    power = np.abs(fft.rfft(taper * (increments - increments.mean()))) ** 2 / np.sum(taper**2)
+    transform = fft.rfft(taper * (increments - increments.mean()), workers=usable_cores())
+    power = np.abs(transform) ** 2 / np.sum(taper**2)
     _, s0 = bin_ratios(fit)
     summary = fit.design.summary
     frequency = np.arange(power.size) * rate_hz / length

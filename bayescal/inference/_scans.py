@@ -30,6 +30,7 @@ import math
 import numpy as np
 from scipy import fft, special, stats
 
+from .._threads import usable_cores
 from ..models._composite import ModelFit, bin_ratios, block_covariance, block_means
 
 SCAN_BLOCKS = 128
@@ -223,7 +224,8 @@ def _block_power(fit: ModelFit, rate_hz: float, length: int):
     window = np.hanning(length + 2)[1:-1]
     segments = increments[: blocks * length].reshape(blocks, length)
     segments = segments - segments.mean(axis=1, keepdims=True)
-    power = np.abs(fft.rfft(window * segments, axis=1)) ** 2 / np.sum(window**2)
+    transform = fft.rfft(window * segments, axis=1, workers=usable_cores())
+    power = np.abs(transform) ** 2 / np.sum(window**2)
     frequency = np.arange(power.shape[1]) * rate_hz / length
     _, expected = bin_ratios(fit)
     summary = fit.design.summary

@@ -118,8 +118,8 @@ def _draw_values(problem: NoiseProblem, kept, mean, sd, key):
 
 
 BIAS_PIECES = 2
-"""The pieces (of walkers) whose bias conditionals are computed at once on two threads
-(:func:`~bayescal._threads.in_threads`), beside the draws' densities: a Cholesky factor per
+"""The pieces (of walkers) whose bias conditionals are computed side by side where there are
+threads (:func:`~bayescal._threads.in_threads`), beside the draws' densities: a Cholesky factor per
 draw, 70 of a 2^20-sample fit's 95 ms there on one thread. Fixed, not the thread count: the
 shapes, so the compiled functions and their numbers, are the same on any machine."""
 

@@ -22,6 +22,11 @@ same record. The peer is timed again after the last call: the machine is shared,
 ratios to the peer of the same process, and the CPU time (all threads) each call took beside
 its wall time, with the last call's stages (those of ``bayescal noise --profile``): on a
 machine shared with other jobs, the CPU time moves less with the load than the wall time.
+The fastest of each stage over the later calls, summed, is printed beside the peer: a call
+of this code on this machine takes no less (the calls differ by what the kernel adds: page
+faults and huge-page compaction, docs/guide/long-recordings.md); and four parts of a fit at
+their fastest, two of them timed alone after the calls (the record's tapered transform, its
+Allan deviation), with the term selection and the posterior.
 Targets (issue 38): first call in a fresh process with a warm cache <= 5 s at 2^20; later
 calls <= 1 s at 2^20 and <= the peer at 2^23.
 
@@ -73,6 +78,7 @@ def child(samples: int, calls: int) -> dict:
     allan_wls_fit(values, RATE)
     peer.append(time.perf_counter() - start)
     return {
+        "alone_s": _parts_alone(values, calls),
         "peer_s": peer,
         "fit_s": times,
         "fit_cpu_s": cpu,
@@ -85,6 +91,35 @@ def child(samples: int, calls: int) -> dict:
         "N": fit.parameters["N"].mean,
         **_devices(),
     }
+
+
+def _parts_alone(values, repeats: int) -> dict:
+    """The fastest of ``repeats`` runs of two parts of a fit, each alone: the tapered transform
+    of the record (what the line scan reads) and its Allan deviation at octave taus (what the
+    classical block and the fit checks read)."""
+    import bayescal as bc
+    from bayescal.classical._periodogram import longest_run_transform
+
+    parts = {
+        "record transform": lambda: longest_run_transform(values),
+        "Allan deviation": lambda: bc.allan_deviation(values, RATE),
+    }
+    fastest = {}
+    for name, part in parts.items():
+        times = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            part()
+            times.append(time.perf_counter() - start)
+        fastest[name] = min(times)
+    return fastest
+
+
+def _fastest_stages(calls: list[dict]) -> dict:
+    """Each stage's shortest time over ``calls`` (their stage times): what a call would take
+    were every stage at its fastest at once, a floor of this code on this machine."""
+    shared = [name for name in calls[0] if all(name in call for call in calls)]
+    return {name: min(call[name] for call in calls) for name in shared}
 
 
 def _usage() -> tuple[float, int]:
@@ -160,6 +195,24 @@ def main() -> None:
                     + ", ".join(f"{k} {v:.2f}" for k, v in result["stages_s"][-1].items()),
                     flush=True,
                 )
+                if later:
+                    fastest = _fastest_stages(result["stages_s"][1:])
+                    total = sum(fastest.values())
+                    print(
+                        "    the fastest of each stage over the later calls: "
+                        + ", ".join(f"{k} {v:.2f}" for k, v in fastest.items())
+                        + f"; together {total:.2f} s ({total / peer:.1f}x the peer's fastest)",
+                        flush=True,
+                    )
+                    alone = result["alone_s"]
+                    parts = sum(alone.values()) + fastest["term selection"] + fastest["posterior"]
+                    print(
+                        "    alone, at their fastest: "
+                        + ", ".join(f"{k} {v:.3f}" for k, v in alone.items())
+                        + f" s; with the term selection and the posterior {parts:.2f} s "
+                        f"({parts / peer:.1f}x the peer's fastest)",
+                        flush=True,
+                    )
                 if args.json is not None:
                     machine = {"cpu_count": os.cpu_count(), "platform": platform.platform()}
                     args.json.write_text(json.dumps({"machine": machine, "runs": runs}, indent=1))

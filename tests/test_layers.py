@@ -117,3 +117,23 @@ def test_the_command_line_parses_without_the_heavy_libraries():
     )
     heavy = {"jax", "arviz", "arviz_base", "numba", "matplotlib", "scipy.stats", "emcee"}
     assert not heavy & set(loaded), heavy & set(loaded)
+
+
+def test_a_classical_only_run_loads_neither_scipys_statistics_nor_the_samplers_libraries():
+    """``bayescal noise --classical-only`` reads, analyses and reports without SciPy's
+    statistics (0.5-1 s to import), ArviZ or emcee. It still loads JAX: the report labels
+    each reading with its term's units from the terms' registry."""
+    code = (
+        "import sys, json, io, contextlib; from bayescal.cli._main import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    code = main(['noise', '--example', '--classical-only'])\n"
+        "print(json.dumps([code, sorted(m for m in sys.modules)]))"
+    )
+    code, loaded = json.loads(
+        subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, check=True
+        ).stdout.splitlines()[-1]
+    )
+    assert code == 0
+    heavy = {"scipy.stats", "arviz", "arviz_base", "arviz_stats", "emcee", "xarray"}
+    assert not heavy & set(loaded), heavy & set(loaded)

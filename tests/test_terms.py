@@ -50,6 +50,18 @@ def test_every_parameter_has_a_unit_and_its_display_units_convert(channel_unit):
     assert parameter_unit("gm_tau", "deg/s") == "s"
 
 
+def test_a_terms_classical_reading_is_in_its_parameters_unit():
+    """A term read off the Allan deviation (IEEE Std 952 Annex C) is read in the unit of the
+    parameter it reads, and shown in the same datasheet units: the report labels a classical
+    reading from the reading's own line, a posterior from the registry."""
+    read = [term for term in NOISE_TERMS if term.reading is not None]
+    assert {term.parameter for term in read} == {"Q", "N", "B", "K"}
+    for term in read:
+        parameter = term.parameters[0]
+        assert parameter.datasheet
+        assert term.reading.time_power == parameter.time_power, term.name
+
+
 @pytest.mark.parametrize("name", list(PARAMETERS))
 def test_every_interval_lies_inside_its_parameters_range(name):
     """However wide the Laplace sd, near either end of the range, the interval stays inside it

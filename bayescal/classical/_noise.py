@@ -254,6 +254,14 @@ class LineReading:
     description: str
     """The line and where it is read (``-1/2 line, extrapolated to tau = 1 s``)."""
 
+    @property
+    def time_power(self) -> float:
+        """The power of seconds in the parameter's unit (the channel's unit times s^power,
+        :func:`~bayescal.recording._units.time_scaled_unit`): sigma(tau) = coefficient * P *
+        tau**slope, in the channel's unit, puts P in it times s^-slope (Q in unit·s, N in
+        unit/√Hz, K in unit·√Hz)."""
+        return -self.slope
+
     def scale(self, tau) -> np.ndarray:
         """The term's Allan deviation per unit parameter at ``tau``."""
         return self.coefficient * np.asarray(tau, dtype=float) ** self.slope
@@ -305,6 +313,12 @@ class FloorReading:
     0.664, IEEE Std 952 eq. C.9)."""
 
     factor: float
+
+    @property
+    def time_power(self) -> float:
+        """The power of seconds in the parameter's unit: 0 (sigma = factor * P puts P in the
+        channel's unit, as B is)."""
+        return 0.0
 
     def scale(self, tau) -> np.ndarray:
         """The term's Allan deviation per unit parameter at ``tau``: the factor."""

@@ -221,9 +221,14 @@ def profile_table(times: list[tuple[str, int, float]], total: float) -> str:
 def _analyse(args) -> int:
     from .._output import file_stem, write_json, write_netcdf
     from .._stages import stage
-    from ..models._terms import parse_terms
 
-    terms = parse_terms(args.terms)
+    terms = None
+    if not args.classical_only or args.terms != DEFAULT_TERMS:
+        # The registry of terms loads JAX (about 1 s): loaded where there is a model to fit,
+        # or a --terms to check.
+        from ..models._terms import parse_terms
+
+        terms = parse_terms(args.terms)
     exports = {f"--export {fmt}": path for fmt, path in args.export or ()}
     (folder,) = declare_outputs([args.file], {"--json": args.json, **exports}, {"--out": args.out})
     topic = None

@@ -14,7 +14,7 @@ The default, ``auto``, lets the record choose its terms by evidence
 from typing import Literal
 
 from .._errors import InputError
-from ..recording._units import convert, parse_unit
+from ..recording._units import datasheet_values
 from .effects._base import NoiseTerm
 from .effects._parameter import Parameter
 from .effects.bias_instability import BiasInstability
@@ -206,10 +206,9 @@ def display_values(name: str, value: float, channel_unit: str) -> dict[str, floa
     """The value of noise parameter ``name`` (in :func:`parameter_unit`) in the units IMU
     datasheets use for a channel of that kind (deg/sqrt(h), deg/h, µg/sqrt(Hz) ...): each
     conventional unit -> the value; empty for a channel whose unit bayescal does not know."""
-    quantity = parse_unit(channel_unit).quantity
-    labels = PARAMETERS[name].display.get(quantity, ()) if name in PARAMETERS else ()
-    unit = parameter_unit(name, channel_unit)
-    return {label: convert(value, unit, label) for label in labels}
+    if name not in PARAMETERS or not PARAMETERS[name].datasheet:
+        return {}
+    return datasheet_values(value, channel_unit, PARAMETERS[name].time_power)
 
 
 BOUNDING_FRACTION = 3.0

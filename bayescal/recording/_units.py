@@ -183,6 +183,29 @@ def time_scaled_unit(unit: str, time_power: float) -> str:
     return named[float(time_power)](unit)
 
 
+DATASHEET_UNITS = {
+    1.0: {"angular_rate": ("arcsec",), "acceleration": ("m/s",)},
+    0.5: {"angular_rate": ("deg/sqrt(h)",), "acceleration": ("µg/sqrt(Hz)", "m/s/sqrt(h)")},
+    0.0: {"angular_rate": ("deg/h",), "acceleration": ("µg",)},
+    -0.5: {"angular_rate": ("deg/h/sqrt(h)",), "acceleration": ("µg*sqrt(Hz)",)},
+    -1.0: {"angular_rate": ("deg/h^2",), "acceleration": ("µg/s",)},
+}
+"""The units IMU datasheets quote a noise figure in, by the figure's time power
+(:func:`time_scaled_unit`) and the quantity of the channel: angle random walk in deg/sqrt(h),
+bias instability in deg/h, rate random walk in deg/h/sqrt(h); velocity random walk in
+µg/sqrt(Hz) and m/s/sqrt(h) ..."""
+
+
+def datasheet_values(value: float, channel_unit: str, time_power: float) -> dict[str, float]:
+    """``value``, a noise figure in ``time_scaled_unit(channel_unit, time_power)``, in each of
+    the :data:`DATASHEET_UNITS` of a channel of that quantity: unit -> value; empty for a
+    channel whose unit bayescal does not know."""
+    quantity = parse_unit(channel_unit).quantity
+    labels = DATASHEET_UNITS[float(time_power)].get(quantity, ())
+    unit = time_scaled_unit(channel_unit, time_power)
+    return {label: convert(value, unit, label) for label in labels}
+
+
 # The unit algebra: every unit a noise figure is written in (a datasheet's, a display's, a
 # channel's) as a factor to SI and the powers of its dimensions (angle, length, time), so
 # that any two units of one dimension convert and two of different dimensions are refused.

@@ -15,8 +15,11 @@ from functools import cached_property
 from importlib.metadata import version
 from typing import TYPE_CHECKING
 
-from ..classical._noise import ClassicalNoise, SlopeReading
-from ..models._terms import TERM_OF_PARAMETER, TERMS, display_values, parameter_unit
+# A classical reading's units come from its IEEE 952 line (its time power), a posterior's
+# from the registry of terms, imported where a posterior is reported: the registry loads JAX
+# (about 1 s), which a classical-only run never needs.
+from ..classical._noise import IEEE952_READINGS, ClassicalNoise, SlopeReading
+from ..recording._units import datasheet_values, time_scaled_unit
 
 if TYPE_CHECKING:  # the Bayesian modules load only for a Bayesian result (--classical-only)
     from ..capabilities._noise import NoiseFit
@@ -108,7 +111,8 @@ def read_at(reading: SlopeReading) -> str:
 
 
 def _reading(parameter: str, reading: SlopeReading, unit: str) -> dict:
-    unit_of_parameter = parameter_unit(parameter, unit)
+    time_power = IEEE952_READINGS[parameter].time_power
+    unit_of_parameter = time_scaled_unit(unit, time_power)
     return {
         "value": reading.value,
         "ci_low": reading.ci_low,
@@ -121,9 +125,9 @@ def _reading(parameter: str, reading: SlopeReading, unit: str) -> dict:
         "display": {
             label: {
                 "value": value,
-                "ci_high": display_values(parameter, reading.ci_high, unit)[label],
+                "ci_high": datasheet_values(reading.ci_high, unit, time_power)[label],
             }
-            for label, value in display_values(parameter, reading.value, unit).items()
+            for label, value in datasheet_values(reading.value, unit, time_power).items()
         },
     }
 
@@ -157,6 +161,8 @@ def display_summary(name: str, summary, unit: str) -> dict[str, dict[str, float]
     """A posterior summary of noise parameter ``name`` (its mean, q05 and q95: attributes or
     keys) in the units datasheets use: label -> {mean, q05, q95}; empty for the bias or a unit
     bayescal does not know."""
+    from ..models._terms import TERM_OF_PARAMETER, display_values
+
     if name not in TERM_OF_PARAMETER:
         return {}
     values = {
@@ -171,6 +177,7 @@ def display_summary(name: str, summary, unit: str) -> dict[str, dict[str, float]
 
 def _bayesian_block(fit: "NoisePosterior", unit: str) -> dict:
     from ..inference._mcmc import ACCEPTANCE_RANGE, AUTOCORR_MULTIPLE, MAX_RHAT, MIN_ESS
+    from ..models._terms import TERM_OF_PARAMETER, parameter_unit
 
     parameters = {}
     for name, summary in fit.parameters.items():
@@ -210,6 +217,8 @@ def _bayesian_block(fit: "NoisePosterior", unit: str) -> dict:
 def comparison_notes(classical: ClassicalNoise, fit: "NoisePosterior", unit: str) -> list[str]:
     """Where the classical numbers and the posterior disagree beyond their uncertainties,
     and why."""
+    from ..models._terms import TERM_OF_PARAMETER, TERMS, parameter_unit
+
     notes = []
     bias = fit.parameters["bias"]
     t_sd = (
@@ -346,7 +355,7 @@ def noise_document(analysis: NoiseAnalysis) -> dict:
                 "unit": unit,
                 "white_floor": _white_floor(noise),
                 "output_white_level": noise.output_white_level,
-                "density_unit": parameter_unit("N", unit),
+                "density_unit": time_scaled_unit(unit, IEEE952_READINGS["N"].time_power),
                 "explanation": "the samples sit on a grid of this step: their rounding error "
                 "(LSB^2/12 per sample) is a known white floor in the model, so N is the "
                 "sensor's white noise without it; the output's white level adds it back",
@@ -460,14 +469,15 @@ def lines_text(block: dict | None, unit: str) -> list[str]:
 
 def _reading_line(parameter: str, reading: SlopeReading, unit: str) -> str:
     """An IEEE 952 reading as a line of the table, with its datasheet units."""
-    unit_of_parameter = parameter_unit(parameter, unit)
+    time_power = IEEE952_READINGS[parameter].time_power
+    unit_of_parameter = time_scaled_unit(unit, time_power)
     if reading.kind == "upper_bound":
         shown, value = f"<= {_number(reading.ci_high)} {unit_of_parameter}", reading.ci_high
     else:
         shown, value = f"{_number(reading.value)} {unit_of_parameter}", reading.value
     extra = "".join(
         f" = {_number(converted)} {label}"
-        for label, converted in display_values(parameter, value, unit).items()
+        for label, converted in datasheet_values(value, unit, time_power).items()
     )
     return f"  {parameter}  {shown}{extra}   ({read_at(reading)})"
 
@@ -478,6 +488,8 @@ def _side_by_side(analysis: NoiseAnalysis) -> list[str]:
 
     Over 80 lines: the table's blocks in the order printed (the terms chosen, the rounding,
     the parameters, their datasheet units, the sampler's checks, the fit's)."""
+    from ..models._terms import parameter_unit
+
     classical, noise, unit = analysis.classical, analysis.noise, analysis.unit
     fit = noise.fit
     percent = f"{100 * classical.confidence:g}%"

@@ -175,9 +175,10 @@ class NoiseTerm(SlotTerm):
     in :data:`bayescal.models._terms.NOISE_TERMS`, from which the model, the term search, the
     priors, the units, the report and the command line read it.
 
-    A term declares its name and aliases, its parameters (:class:`Parameter`: unit, display
-    units, coordinate and prior), its classical reading and the sensor-card entries that give
-    it, and computes, from its parameters by name (``values``; JAX arrays broadcast):
+    A term declares its name and aliases, its parameters (:class:`Parameter`: unit, whether
+    datasheets quote it, coordinate and prior), its classical reading and the sensor-card
+    entries that give it, and computes, from its parameters by name (``values``; JAX arrays
+    broadcast):
 
     - its *components* of the spectrum of the sample increments (:meth:`components`): each a
       fixed shape — the increments' autocovariance (numpy, integer lags), their two-sided

@@ -1,4 +1,4 @@
-"""A noise term's parameter: its unit, its conventional display units, and the one coordinate
+"""A noise term's parameter: its unit, whether datasheets quote it, and the one coordinate
 it is sampled in, whose bounds are the parameter's allowed range everywhere bayescal uses it
 (the noise fit, discovery, the thermal fit, a calibration's file).
 
@@ -15,7 +15,7 @@ time between a sample period and the record's length, the ramp's scale set by it
 """
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import jax
 import jax.numpy as jnp
@@ -67,9 +67,10 @@ class Parameter:
         (location, sd) of the normal prior of its coordinate; None: log-normal around the
         level the Allan curve allows for the term (its reference scale), sd
         ``PRIOR_LOG_SD`` in the log.
-    display : dict
-        Conventional units for a channel of each quantity (``angular_rate``,
-        ``acceleration``): datasheets' ``deg/sqrt(h)``, ``deg/h``, ``µg/sqrt(Hz)`` ...
+    datasheet : bool
+        Whether IMU datasheets quote it: it is then also shown in their units
+        (:data:`~bayescal.recording._units.DATASHEET_UNITS` of its time power: deg/sqrt(h),
+        deg/h, µg/sqrt(Hz) ...).
     """
 
     name: str
@@ -80,13 +81,15 @@ class Parameter:
     offset: float = 0.0
     span: float | str = 1.0
     prior: tuple[float, float] | None = None
-    display: dict = field(default_factory=dict)
+    datasheet: bool = False
 
     def __post_init__(self):
         if self.link not in LINKS:
             raise ValueError(f"{self.name}: link={self.link!r} is not one of {LINKS}")
         if (self.time_power is None) == (not self.unit):
             raise ValueError(f"{self.name}: give either time_power or a fixed unit")
+        if self.datasheet and self.time_power is None:
+            raise ValueError(f"{self.name}: a datasheet figure has a time_power")
 
     def unit_for(self, channel_unit: str) -> str:
         """Its unit for a channel in ``channel_unit`` (ASCII, e.g. ``deg/s/sqrt(Hz)``)."""

@@ -62,7 +62,7 @@ class BiasInstability(NoiseTerm):
             "B",
             "bias instability",
             time_power=0.0,
-            display={"angular_rate": ("deg/h",), "acceleration": ("µg",)},
+            datasheet=True,
         ),
     )
     streams: ClassVar[tuple[int, ...]] = (3,)

@@ -104,7 +104,7 @@ class GaussMarkov(NoiseTerm):
             "gm_sigma",
             "Gauss-Markov sigma",
             time_power=0.0,
-            display={"angular_rate": ("deg/h",), "acceleration": ("µg",)},
+            datasheet=True,
         ),
         # Near flat in log tau_c over the record's range (logistic sd 1.8).
         Parameter(

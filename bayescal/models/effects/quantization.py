@@ -34,7 +34,7 @@ class Quantization(NoiseTerm):
             "Q",
             "quantization (white angle noise)",
             time_power=1.0,
-            display={"angular_rate": ("arcsec",), "acceleration": ("m/s",)},
+            datasheet=True,
         ),
     )
     streams: ClassVar[tuple[int, ...]] = (4,)

@@ -38,7 +38,7 @@ class RateRamp(NoiseTerm):
             link="linear",
             span="linear_scale",
             prior=(0.0, 1.0),
-            display={"angular_rate": ("deg/h^2",), "acceleration": ("µg/s",)},
+            datasheet=True,
         ),
     )
     mean_rate: ClassVar[str] = "R"

@@ -30,7 +30,7 @@ class RateRandomWalk(NoiseTerm):
             "K",
             "rate random walk",
             time_power=-0.5,
-            display={"angular_rate": ("deg/h/sqrt(h)",), "acceleration": ("µg*sqrt(Hz)",)},
+            datasheet=True,
         ),
     )
     streams: ClassVar[tuple[int, ...]] = (1, 2)

@@ -34,10 +34,7 @@ class White(NoiseTerm):
             "N",
             "white noise density",
             time_power=0.5,
-            display={
-                "angular_rate": ("deg/sqrt(h)",),
-                "acceleration": ("µg/sqrt(Hz)", "m/s/sqrt(h)"),
-            },
+            datasheet=True,
         ),
     )
     candidate: ClassVar[bool] = False

@@ -539,7 +539,9 @@ def _log_tail(ratio, dfn, dfd):
     with np.errstate(divide="ignore"):
         upper = np.log(special.fdtrc(dfn, dfd, x))
         lower = np.log1p(-special.fdtr(dfn, dfd, x))
-    return np.where(x > special.fdtri(dfn, dfd, 0.5), upper, lower)
+    log_p = np.where(x > special.fdtri(dfn, dfd, 0.5), upper, lower)
+    # At and below zero logsf gives 0.0, where log1p(-0.0) is -0.0.
+    return np.where(x == 0.0, 0.0, log_p)
 
 
 def _candidates(results, power, taken) -> list[tuple[int, bool]]:

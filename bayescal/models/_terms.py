@@ -1,8 +1,9 @@
 """The registry of noise terms: every term of the stationary noise model, one class in one
 file of :mod:`.effects`, registered once in :data:`NOISE_TERMS`. Everything else that speaks
 of terms reads it: the names and aliases a user may give (``--terms``, ``terms=``), each
-parameter's unit, display units, coordinate and prior, the classical readings, the sensor
-cards' entries, the candidates of the term search, the model and its likelihood.
+parameter's unit, whether datasheets quote it, its coordinate and prior, the classical
+readings, the sensor cards' entries, the candidates of the term search, the model and its
+likelihood.
 
 Adding a term is its file and one line in :data:`NOISE_TERMS`.
 

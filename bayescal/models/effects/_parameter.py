@@ -22,7 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ... import _x64  # noqa: F401  (float64 before any JAX array)
-from ...recording._units import time_scaled_unit
+from ...recording._units import DATASHEET_UNITS, time_scaled_unit
 
 LINKS = ("log", "logit", "tanh", "linear", "log_logit")
 """The coordinates a parameter may be sampled in (module docstring)."""
@@ -88,8 +88,11 @@ class Parameter:
             raise ValueError(f"{self.name}: link={self.link!r} is not one of {LINKS}")
         if (self.time_power is None) == (not self.unit):
             raise ValueError(f"{self.name}: give either time_power or a fixed unit")
-        if self.datasheet and self.time_power is None:
-            raise ValueError(f"{self.name}: a datasheet figure has a time_power")
+        power = math.nan if self.time_power is None else float(self.time_power)
+        if self.datasheet and power not in DATASHEET_UNITS:
+            raise ValueError(
+                f"{self.name}: a datasheet figure has a time_power among {list(DATASHEET_UNITS)}"
+            )
 
     def unit_for(self, channel_unit: str) -> str:
         """Its unit for a channel in ``channel_unit`` (ASCII, e.g. ``deg/s/sqrt(Hz)``)."""
